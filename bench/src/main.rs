@@ -1,0 +1,2 @@
+//! Yggdrasil benchmarks.
+fn main() {}
