@@ -1,1 +1,27 @@
-//! Yggdrasil scene graph store.
+//! Yggdrasil scene graph store: a layered 3D scene graph for robots.
+//!
+//! * See [`SceneGraph`] for the live, editable graph and its mutations.
+//! * See [`SceneView`] for the one read interface, implemented by the live graph and by
+//!   [`ArchivedScene`] (validated rkyv bytes from a `.ygg` file or shared memory).
+//! * See [`query`] for the queries, written once over [`SceneView`].
+//! * See [`snapshot`] for archiving a graph and opening a `.ygg` file.
+
+#[cfg(not(target_endian = "little"))]
+compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
+
+mod error;
+mod feature;
+mod graph;
+mod id;
+mod live_view;
+pub mod query;
+pub mod snapshot;
+mod view;
+
+pub use error::{EditResult, GraphEditError, SnapshotError};
+pub use feature::{FeatureRef, FeatureValue};
+pub use graph::{Node, SceneGraph};
+pub use id::{Aabb, LayerId, NodeId, Point, distance_squared};
+pub use query::Scope;
+pub use snapshot::{ArchivedScene, SnapshotFile};
+pub use view::{EdgeRef, SceneView};

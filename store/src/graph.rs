@@ -1,0 +1,897 @@
+//! The live scene graph and its mutations.
+//!
+//! # Invariants (checked by [`SceneGraph::check_invariants`])
+//! - Layers form a DAG; layer names are unique.
+//! - Every node belongs to exactly one layer and appears once in that layer's node list.
+//! - Edges join two distinct nodes of the same layer; `out_edges` and `in_edges` mirror
+//!   each other and are sorted by the other end's id.
+//! - A node has at most one parent; the parent's layer has a DAG edge to the child's
+//!   layer; `children` lists mirror parent pointers and are sorted by id.
+//! - A node with its bounding box enabled holds the exact AABB of every point in its
+//!   sub-tree (or none when the sub-tree has no point).
+//! - The inverted label and key indexes hold exactly the nodes carrying each term.
+//!
+//! Every mutation validates first and changes nothing when it returns an error.
+
+use crate::error::{EditResult, GraphEditError};
+use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
+use crate::{Aabb, LayerId, NodeId, Point};
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::collections::BTreeMap;
+
+/// One node of the live graph.
+#[derive(Clone, Debug)]
+pub struct Node {
+    pub(crate) id: NodeId,
+    pub(crate) layer: LayerId,
+    /// Position in the layer's node list.
+    pub(crate) slot: u32,
+    pub(crate) points: Vec<Point>,
+    pub(crate) parent: Option<NodeId>,
+    pub(crate) children: Vec<NodeId>,
+    pub(crate) out_edges: Vec<(NodeId, Sym)>,
+    pub(crate) in_edges: Vec<(NodeId, Sym)>,
+    pub(crate) labels: Vec<Sym>,
+    pub(crate) features: Vec<(Sym, StoredValue)>,
+    pub(crate) bbox_enabled: bool,
+    pub(crate) aabb: Option<Aabb>,
+}
+
+/// One layer of the live graph.
+#[derive(Clone, Debug)]
+pub(crate) struct Layer {
+    pub(crate) name: String,
+    pub(crate) parents: Vec<LayerId>,
+    pub(crate) children: Vec<LayerId>,
+    pub(crate) nodes: Vec<NodeId>,
+    /// Incremented on every change to the layer's archived content.
+    pub(crate) generation: u64,
+    pub(crate) label_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
+    pub(crate) key_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
+}
+
+/// A layered 3D scene graph that can be edited: the writer's live graph.
+///
+/// Start with [`SceneGraph::new`], add layers with [`SceneGraph::add_layer`] and
+/// [`SceneGraph::add_layer_edge`], then nodes, geometry, features, edges and nestings.
+/// Query it through [`crate::SceneView`] (the same queries run on archived snapshots).
+#[derive(Clone, Debug, Default)]
+pub struct SceneGraph {
+    pub(crate) strings: Interner,
+    pub(crate) layers: BTreeMap<LayerId, Layer>,
+    pub(crate) layer_names: FxHashMap<String, LayerId>,
+    next_layer: u32,
+    pub(crate) nodes: FxHashMap<NodeId, Node>,
+    pub(crate) label_layers: FxHashMap<Sym, Vec<LayerId>>,
+    pub(crate) key_layers: FxHashMap<Sym, Vec<LayerId>>,
+    /// Incremented when the layer set or the DAG changes.
+    pub(crate) structure_generation: u64,
+}
+
+/// Which inverted index a posting belongs to.
+#[derive(Clone, Copy)]
+enum Postings {
+    Label,
+    Key,
+}
+
+impl SceneGraph {
+    /// An empty graph.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of nodes in the whole graph.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The generation of a layer: it increases whenever the layer's content changes.
+    pub fn layer_generation(&self, layer: LayerId) -> Option<u64> {
+        self.layers.get(&layer).map(|l| l.generation)
+    }
+
+    /// The generation of the layer set and DAG.
+    pub fn structure_generation(&self) -> u64 {
+        self.structure_generation
+    }
+
+    fn layer(&self, id: LayerId) -> EditResult<&Layer> {
+        self.layers.get(&id).ok_or(GraphEditError::UnknownLayer(id))
+    }
+
+    fn node(&self, id: NodeId) -> EditResult<&Node> {
+        self.nodes.get(&id).ok_or(GraphEditError::UnknownNode(id))
+    }
+
+    fn touch(&mut self, layer: LayerId) {
+        if let Some(l) = self.layers.get_mut(&layer) {
+            l.generation += 1;
+        }
+    }
+
+    // ---- layers -------------------------------------------------------------------
+
+    /// Adds an empty layer named `name` and returns its id.
+    ///
+    /// # Errors
+    /// [`GraphEditError::DuplicateLayerName`] if the name is taken.
+    pub fn add_layer(&mut self, name: &str) -> EditResult<LayerId> {
+        if self.layer_names.contains_key(name) {
+            return Err(GraphEditError::DuplicateLayerName(name.to_owned()));
+        }
+        let id = LayerId(self.next_layer);
+        self.insert_layer_with_id(id, name);
+        Ok(id)
+    }
+
+    /// Adds a layer under a given id (used when copying a scene's layers).
+    pub(crate) fn insert_layer_with_id(&mut self, id: LayerId, name: &str) {
+        self.layers.insert(
+            id,
+            Layer {
+                name: name.to_owned(),
+                parents: Vec::new(),
+                children: Vec::new(),
+                nodes: Vec::new(),
+                generation: 1,
+                label_postings: FxHashMap::default(),
+                key_postings: FxHashMap::default(),
+            },
+        );
+        self.layer_names.insert(name.to_owned(), id);
+        self.next_layer = self.next_layer.max(id.0 + 1);
+        self.structure_generation += 1;
+    }
+
+    /// The id of the layer named `name`.
+    pub fn layer_id(&self, name: &str) -> EditResult<LayerId> {
+        self.layer_names
+            .get(name)
+            .copied()
+            .ok_or_else(|| GraphEditError::UnknownLayerName(name.to_owned()))
+    }
+
+    /// Removes a layer with all its nodes (their edges and nestings go with them) and
+    /// its DAG edges.
+    pub fn remove_layer(&mut self, id: LayerId) -> EditResult {
+        let layer = self.layer(id)?;
+        let nodes = layer.nodes.clone();
+        let parents = layer.parents.clone();
+        let children = layer.children.clone();
+        for n in nodes {
+            self.remove_node(n)
+                .expect("node listed in its layer exists");
+        }
+        for p in parents {
+            self.layers
+                .get_mut(&p)
+                .expect("DAG parent exists")
+                .children
+                .retain(|&c| c != id);
+        }
+        for c in children {
+            self.layers
+                .get_mut(&c)
+                .expect("DAG child exists")
+                .parents
+                .retain(|&p| p != id);
+        }
+        let layer = self.layers.remove(&id).expect("checked above");
+        self.layer_names.remove(&layer.name);
+        self.structure_generation += 1;
+        Ok(())
+    }
+
+    /// Adds the DAG edge `parent -> child`: `parent` encompasses `child`, and nodes of
+    /// `parent` may then nest nodes of `child`.
+    ///
+    /// # Errors
+    /// Unknown layers, an existing edge, or a cycle ([`GraphEditError::WouldCreateCycle`]).
+    pub fn add_layer_edge(&mut self, parent: LayerId, child: LayerId) -> EditResult {
+        self.layer(parent)?;
+        let c = self.layer(child)?;
+        if c.parents.contains(&parent) {
+            return Err(GraphEditError::DuplicateLayerEdge { parent, child });
+        }
+        if parent == child || self.layer_reaches(child, parent) {
+            return Err(GraphEditError::WouldCreateCycle { parent, child });
+        }
+        self.layers
+            .get_mut(&parent)
+            .expect("checked")
+            .children
+            .push(child);
+        self.layers
+            .get_mut(&child)
+            .expect("checked")
+            .parents
+            .push(parent);
+        self.structure_generation += 1;
+        Ok(())
+    }
+
+    /// Whether `to` is reachable from `from` along DAG edges.
+    fn layer_reaches(&self, from: LayerId, to: LayerId) -> bool {
+        let mut stack = vec![from];
+        let mut seen = FxHashSet::default();
+        while let Some(l) = stack.pop() {
+            if l == to {
+                return true;
+            }
+            if seen.insert(l) {
+                stack.extend(self.layers[&l].children.iter().copied());
+            }
+        }
+        false
+    }
+
+    /// Removes the DAG edge `parent -> child`.
+    ///
+    /// # Errors
+    /// [`GraphEditError::LayerEdgeInUse`] while nodes are nested along it.
+    pub fn remove_layer_edge(&mut self, parent: LayerId, child: LayerId) -> EditResult {
+        self.layer(parent)?;
+        let c = self.layer(child)?;
+        if !c.parents.contains(&parent) {
+            return Err(GraphEditError::UnknownLayerEdge { parent, child });
+        }
+        let count = c
+            .nodes
+            .iter()
+            .filter(|n| {
+                self.nodes[n]
+                    .parent
+                    .is_some_and(|p| self.nodes[&p].layer == parent)
+            })
+            .count();
+        if count > 0 {
+            return Err(GraphEditError::LayerEdgeInUse {
+                parent,
+                child,
+                count,
+            });
+        }
+        self.layers
+            .get_mut(&parent)
+            .expect("checked")
+            .children
+            .retain(|&c| c != child);
+        self.layers
+            .get_mut(&child)
+            .expect("checked")
+            .parents
+            .retain(|&p| p != parent);
+        self.structure_generation += 1;
+        Ok(())
+    }
+
+    // ---- nodes --------------------------------------------------------------------
+
+    /// Adds a node with no geometry, features or relations to `layer`.
+    ///
+    /// # Errors
+    /// Unknown layer, an id already in use, or the reserved id `u64::MAX`.
+    pub fn add_node(&mut self, id: NodeId, layer: LayerId) -> EditResult {
+        if id == NodeId::NONE {
+            return Err(GraphEditError::ReservedNodeId(id));
+        }
+        let l = self
+            .layers
+            .get_mut(&layer)
+            .ok_or(GraphEditError::UnknownLayer(layer))?;
+        let entry = match self.nodes.entry(id) {
+            std::collections::hash_map::Entry::Occupied(_) => {
+                return Err(GraphEditError::DuplicateNode(id));
+            }
+            std::collections::hash_map::Entry::Vacant(v) => v,
+        };
+        let slot = l.nodes.len() as u32;
+        l.nodes.push(id);
+        l.generation += 1;
+        entry.insert(Node {
+            id,
+            layer,
+            slot,
+            points: Vec::new(),
+            parent: None,
+            children: Vec::new(),
+            out_edges: Vec::new(),
+            in_edges: Vec::new(),
+            labels: Vec::new(),
+            features: Vec::new(),
+            bbox_enabled: false,
+            aabb: None,
+        });
+        Ok(())
+    }
+
+    /// Removes a node, its edges (both directions) and its nesting. Its children stay,
+    /// un-nested.
+    pub fn remove_node(&mut self, id: NodeId) -> EditResult {
+        let node = self.node(id)?;
+        let children = node.children.clone();
+        let out: Vec<NodeId> = node.out_edges.iter().map(|e| e.0).collect();
+        let inc: Vec<NodeId> = node.in_edges.iter().map(|e| e.0).collect();
+        for c in children {
+            self.unnest(c).expect("child of an existing node");
+        }
+        if node_parent(self, id).is_some() {
+            self.unnest(id).expect("nested node");
+        }
+        for t in out {
+            self.remove_edge(id, t).expect("listed edge");
+        }
+        for s in inc {
+            self.remove_edge(s, id).expect("listed edge");
+        }
+        let labels: Vec<Sym> = self.nodes[&id].labels.clone();
+        let keys: Vec<Sym> = self.nodes[&id].features.iter().map(|f| f.0).collect();
+        let node = self.nodes.remove(&id).expect("checked");
+        for s in labels {
+            self.unpost(node.layer, Postings::Label, s, id);
+        }
+        for s in keys {
+            self.unpost(node.layer, Postings::Key, s, id);
+        }
+        let layer = self
+            .layers
+            .get_mut(&node.layer)
+            .expect("node's layer exists");
+        layer.nodes.swap_remove(node.slot as usize);
+        if let Some(&moved) = layer.nodes.get(node.slot as usize) {
+            self.nodes.get_mut(&moved).expect("listed").slot = node.slot;
+        }
+        layer.generation += 1;
+        Ok(())
+    }
+
+    /// Replaces a node's geometry (an empty vector removes it). This is how a node moves.
+    /// Bounding boxes above it stay exact.
+    ///
+    /// # Errors
+    /// Unknown node or a non-finite coordinate.
+    pub fn set_geometry(&mut self, id: NodeId, points: Vec<Point>) -> EditResult {
+        self.node(id)?;
+        if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(GraphEditError::NonFinitePoint { node: id, index });
+        }
+        let node = self.nodes.get_mut(&id).expect("checked");
+        let old = std::mem::replace(&mut node.points, points);
+        let layer = node.layer;
+        self.touch(layer);
+        self.geometry_changed(id, &old);
+        Ok(())
+    }
+
+    // ---- features and labels ------------------------------------------------------
+
+    /// Sets feature `key` of a node (replacing an earlier value).
+    ///
+    /// # Errors
+    /// Unknown node, or a NaN float.
+    pub fn set_feature(&mut self, id: NodeId, key: &str, value: FeatureValue) -> EditResult {
+        self.node(id)?;
+        if matches!(value, FeatureValue::Float(v) if v.is_nan()) {
+            return Err(GraphEditError::NanFeature {
+                node: id,
+                key: key.to_owned(),
+            });
+        }
+        let k = self.strings.intern(key);
+        let stored = match value {
+            FeatureValue::Str(s) => StoredValue::Str(self.strings.intern(&s)),
+            FeatureValue::Int(v) => StoredValue::Int(v),
+            FeatureValue::Float(v) => StoredValue::Float(v),
+            FeatureValue::Bool(v) => StoredValue::Bool(v),
+        };
+        let node = self.nodes.get_mut(&id).expect("checked");
+        let layer = node.layer;
+        match node.features.iter_mut().find(|f| f.0 == k) {
+            Some(f) => f.1 = stored,
+            None => {
+                node.features.push((k, stored));
+                self.post(layer, Postings::Key, k, id);
+            }
+        }
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// Removes feature `key` of a node.
+    pub fn remove_feature(&mut self, id: NodeId, key: &str) -> EditResult {
+        let missing = || GraphEditError::UnknownFeature {
+            node: id,
+            key: key.to_owned(),
+        };
+        let node = self.node(id)?;
+        let k = self.strings.get(key).ok_or_else(missing)?;
+        let at = node
+            .features
+            .iter()
+            .position(|f| f.0 == k)
+            .ok_or_else(missing)?;
+        let node = self.nodes.get_mut(&id).expect("checked");
+        node.features.remove(at);
+        let layer = node.layer;
+        self.unpost(layer, Postings::Key, k, id);
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// Adds a label to a node's label set (no effect if already there).
+    pub fn add_label(&mut self, id: NodeId, label: &str) -> EditResult {
+        self.node(id)?;
+        let s = self.strings.intern(label);
+        let node = self.nodes.get_mut(&id).expect("checked");
+        if node.labels.contains(&s) {
+            return Ok(());
+        }
+        node.labels.push(s);
+        let layer = node.layer;
+        self.post(layer, Postings::Label, s, id);
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// Removes a label from a node's label set.
+    pub fn remove_label(&mut self, id: NodeId, label: &str) -> EditResult {
+        let missing = || GraphEditError::UnknownLabel {
+            node: id,
+            label: label.to_owned(),
+        };
+        let node = self.node(id)?;
+        let s = self.strings.get(label).ok_or_else(missing)?;
+        let at = node
+            .labels
+            .iter()
+            .position(|&l| l == s)
+            .ok_or_else(missing)?;
+        let node = self.nodes.get_mut(&id).expect("checked");
+        node.labels.remove(at);
+        let layer = node.layer;
+        self.unpost(layer, Postings::Label, s, id);
+        self.touch(layer);
+        Ok(())
+    }
+
+    fn post(&mut self, layer: LayerId, which: Postings, term: Sym, id: NodeId) {
+        let l = self.layers.get_mut(&layer).expect("node's layer exists");
+        let (map, graph_map) = match which {
+            Postings::Label => (&mut l.label_postings, &mut self.label_layers),
+            Postings::Key => (&mut l.key_postings, &mut self.key_layers),
+        };
+        let set = map.entry(term).or_default();
+        if set.is_empty() {
+            graph_map.entry(term).or_default().push(layer);
+        }
+        set.insert(id);
+    }
+
+    fn unpost(&mut self, layer: LayerId, which: Postings, term: Sym, id: NodeId) {
+        let l = self.layers.get_mut(&layer).expect("node's layer exists");
+        let (map, graph_map) = match which {
+            Postings::Label => (&mut l.label_postings, &mut self.label_layers),
+            Postings::Key => (&mut l.key_postings, &mut self.key_layers),
+        };
+        let Some(set) = map.get_mut(&term) else {
+            return;
+        };
+        set.remove(&id);
+        if set.is_empty() {
+            map.remove(&term);
+            if let Some(ls) = graph_map.get_mut(&term) {
+                ls.retain(|&x| x != layer);
+                if ls.is_empty() {
+                    graph_map.remove(&term);
+                }
+            }
+        }
+    }
+
+    // ---- edges --------------------------------------------------------------------
+
+    /// Adds the directed edge `source -> target` with a description. Both ends must be
+    /// in the same layer.
+    pub fn add_edge(&mut self, source: NodeId, target: NodeId, description: &str) -> EditResult {
+        let s = self.node(source)?;
+        let t = self.node(target)?;
+        if source == target {
+            return Err(GraphEditError::SelfLoop(source));
+        }
+        if s.layer != t.layer {
+            return Err(GraphEditError::CrossLayerEdge {
+                from: source,
+                to: target,
+                from_layer: s.layer,
+                to_layer: t.layer,
+            });
+        }
+        let at = match s.out_edges.binary_search_by_key(&target, |e| e.0) {
+            Ok(_) => {
+                return Err(GraphEditError::DuplicateEdge {
+                    from: source,
+                    to: target,
+                });
+            }
+            Err(at) => at,
+        };
+        let layer = s.layer;
+        let d = self.strings.intern(description);
+        self.nodes
+            .get_mut(&source)
+            .expect("checked")
+            .out_edges
+            .insert(at, (target, d));
+        let t = self.nodes.get_mut(&target).expect("checked");
+        let at = t
+            .in_edges
+            .binary_search_by_key(&source, |e| e.0)
+            .unwrap_or_else(|e| e);
+        t.in_edges.insert(at, (source, d));
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// Removes the edge `source -> target`.
+    pub fn remove_edge(&mut self, source: NodeId, target: NodeId) -> EditResult {
+        let s = self.node(source)?;
+        self.node(target)?;
+        let at = s
+            .out_edges
+            .binary_search_by_key(&target, |e| e.0)
+            .map_err(|_| GraphEditError::UnknownEdge {
+                from: source,
+                to: target,
+            })?;
+        let layer = s.layer;
+        self.nodes
+            .get_mut(&source)
+            .expect("checked")
+            .out_edges
+            .remove(at);
+        let t = self.nodes.get_mut(&target).expect("checked");
+        let at = t
+            .in_edges
+            .binary_search_by_key(&source, |e| e.0)
+            .expect("mirrored edge");
+        t.in_edges.remove(at);
+        self.touch(layer);
+        Ok(())
+    }
+
+    // ---- nesting ------------------------------------------------------------------
+
+    /// Nests `child` under `parent`. The parent's layer must have a DAG edge to the
+    /// child's layer, and the child must not have a parent yet.
+    pub fn nest(&mut self, parent: NodeId, child: NodeId) -> EditResult {
+        let p = self.node(parent)?;
+        let c = self.node(child)?;
+        if let Some(existing) = c.parent {
+            return Err(GraphEditError::AlreadyNested {
+                parent: existing,
+                child,
+            });
+        }
+        if !self.layers[&p.layer].children.contains(&c.layer) {
+            return Err(GraphEditError::NestingOffDag {
+                parent,
+                child,
+                parent_layer: p.layer,
+                child_layer: c.layer,
+            });
+        }
+        let (pl, cl) = (p.layer, c.layer);
+        let p = self.nodes.get_mut(&parent).expect("checked");
+        let at = p.children.binary_search(&child).unwrap_or_else(|e| e);
+        p.children.insert(at, child);
+        self.nodes.get_mut(&child).expect("checked").parent = Some(parent);
+        self.touch(pl);
+        self.touch(cl);
+        if let Some(added) = self.subtree_box(child) {
+            self.grow_ancestor_boxes(parent, &added);
+        }
+        Ok(())
+    }
+
+    /// Removes `child` from its parent.
+    pub fn unnest(&mut self, child: NodeId) -> EditResult {
+        let c = self.node(child)?;
+        let parent = c.parent.ok_or(GraphEditError::NotNested(child))?;
+        let cl = c.layer;
+        self.nodes.get_mut(&child).expect("checked").parent = None;
+        let p = self.nodes.get_mut(&parent).expect("parent exists");
+        let at = p.children.binary_search(&child).expect("mirrored nesting");
+        p.children.remove(at);
+        let pl = p.layer;
+        self.touch(pl);
+        self.touch(cl);
+        self.recompute_ancestor_boxes(parent);
+        Ok(())
+    }
+
+    // ---- bounding boxes -----------------------------------------------------------
+
+    /// Enables the node's bounding box: from now on it holds the exact AABB of its
+    /// sub-tree.
+    pub fn enable_bounding_box(&mut self, id: NodeId) -> EditResult {
+        let node = self.node(id)?;
+        if node.bbox_enabled {
+            return Ok(());
+        }
+        let layer = node.layer;
+        let aabb = self.subtree_box(id);
+        let node = self.nodes.get_mut(&id).expect("checked");
+        node.bbox_enabled = true;
+        node.aabb = aabb;
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// Disables the node's bounding box.
+    pub fn disable_bounding_box(&mut self, id: NodeId) -> EditResult {
+        self.node(id)?;
+        let node = self.nodes.get_mut(&id).expect("checked");
+        if !node.bbox_enabled {
+            return Ok(());
+        }
+        node.bbox_enabled = false;
+        node.aabb = None;
+        let layer = node.layer;
+        self.touch(layer);
+        Ok(())
+    }
+
+    /// The exact AABB of every point in `id`'s sub-tree, using enabled boxes below as
+    /// shortcuts.
+    pub(crate) fn subtree_box(&self, id: NodeId) -> Option<Aabb> {
+        let node = &self.nodes[&id];
+        if node.bbox_enabled {
+            return node.aabb;
+        }
+        self.scan_subtree_box(node)
+    }
+
+    fn scan_subtree_box(&self, node: &Node) -> Option<Aabb> {
+        let mut acc = Aabb::from_points(&node.points);
+        for c in &node.children {
+            if let Some(b) = self.subtree_box(*c) {
+                acc = Some(acc.map_or(b, |a| a.union(&b)));
+            }
+        }
+        acc
+    }
+
+    /// Keeps boxes exact after `id`'s points changed from `old` to its current points.
+    fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
+        let mut cur = Some(id);
+        while let Some(n) = cur {
+            let node = &self.nodes[&n];
+            cur = node.parent;
+            if !node.bbox_enabled {
+                continue;
+            }
+            let on_boundary = node
+                .aabb
+                .is_some_and(|b| old.iter().any(|p| on_box_boundary(&b, p)));
+            let aabb = if on_boundary {
+                self.scan_subtree_box(node)
+            } else {
+                let mut b = node.aabb;
+                for p in &self.nodes[&id].points {
+                    b = Some(b.map_or(Aabb::from_point(*p), |mut b| {
+                        b.grow(p);
+                        b
+                    }));
+                }
+                b
+            };
+            self.set_box(n, aabb);
+        }
+    }
+
+    fn set_box(&mut self, n: NodeId, aabb: Option<Aabb>) {
+        let node = self.nodes.get_mut(&n).expect("exists");
+        if node.aabb != aabb {
+            node.aabb = aabb;
+            let layer = node.layer;
+            self.touch(layer);
+        }
+    }
+
+    fn grow_ancestor_boxes(&mut self, from: NodeId, added: &Aabb) {
+        let mut cur = Some(from);
+        while let Some(n) = cur {
+            let node = &self.nodes[&n];
+            cur = node.parent;
+            if node.bbox_enabled {
+                let b = node.aabb.map_or(*added, |b| b.union(added));
+                self.set_box(n, Some(b));
+            }
+        }
+    }
+
+    fn recompute_ancestor_boxes(&mut self, from: NodeId) {
+        let mut cur = Some(from);
+        while let Some(n) = cur {
+            let node = &self.nodes[&n];
+            cur = node.parent;
+            if node.bbox_enabled {
+                let b = self.scan_subtree_box(node);
+                self.set_box(n, b);
+            }
+        }
+    }
+
+    // ---- invariants ---------------------------------------------------------------
+
+    /// Checks every invariant listed in the module docs; `Err` names the first broken one.
+    /// Meant for tests and debugging: it scans the whole graph.
+    pub fn check_invariants(&self) -> Result<(), String> {
+        for (&lid, layer) in &self.layers {
+            if self.layer_names.get(&layer.name) != Some(&lid) {
+                return Err(format!("layer {lid} name {:?} not indexed", layer.name));
+            }
+            if self.layer_reaches_strictly(lid) {
+                return Err(format!("layer {lid} is on a cycle"));
+            }
+            for c in &layer.children {
+                if !self.layers[c].parents.contains(&lid) {
+                    return Err(format!("DAG edge {lid}->{c} not mirrored"));
+                }
+            }
+            for (slot, n) in layer.nodes.iter().enumerate() {
+                let node = self
+                    .nodes
+                    .get(n)
+                    .ok_or(format!("layer {lid} lists missing {n}"))?;
+                if node.layer != lid || node.slot as usize != slot {
+                    return Err(format!("node {n} layer/slot mismatch"));
+                }
+            }
+            for (which, map, graph_map) in [
+                ("label", &layer.label_postings, &self.label_layers),
+                ("key", &layer.key_postings, &self.key_layers),
+            ] {
+                for (term, set) in map {
+                    if set.is_empty() || !graph_map.get(term).is_some_and(|ls| ls.contains(&lid)) {
+                        return Err(format!("{which} posting {term} of {lid} not in graph map"));
+                    }
+                    for n in set {
+                        let node = self
+                            .nodes
+                            .get(n)
+                            .ok_or(format!("{which} posting of missing {n}"))?;
+                        let has = match which {
+                            "label" => node.labels.contains(term),
+                            _ => node.features.iter().any(|f| f.0 == *term),
+                        };
+                        if !has || node.layer != lid {
+                            return Err(format!("{which} posting {term} wrongly lists {n}"));
+                        }
+                    }
+                }
+            }
+        }
+        if self.layer_names.len() != self.layers.len() {
+            return Err("layer name index has stale entries".into());
+        }
+        let listed: usize = self.layers.values().map(|l| l.nodes.len()).sum();
+        if listed != self.nodes.len() {
+            return Err("node count differs from layer lists".into());
+        }
+        for (term, ls) in self.label_layers.iter().chain(self.key_layers.iter()) {
+            if ls.is_empty() {
+                return Err(format!("graph posting {term} empty"));
+            }
+        }
+        for (&id, node) in &self.nodes {
+            if node.id != id {
+                return Err(format!("node {id} stored under wrong key"));
+            }
+            if node.points.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
+                return Err(format!("node {id} has a non-finite point"));
+            }
+            for s in &node.labels {
+                if !self.layers[&node.layer]
+                    .label_postings
+                    .get(s)
+                    .is_some_and(|p| p.contains(&id))
+                {
+                    return Err(format!("node {id} label not posted"));
+                }
+            }
+            for (k, _) in &node.features {
+                if !self.layers[&node.layer]
+                    .key_postings
+                    .get(k)
+                    .is_some_and(|p| p.contains(&id))
+                {
+                    return Err(format!("node {id} feature key not posted"));
+                }
+            }
+            if let Some(p) = node.parent {
+                let pn = self
+                    .nodes
+                    .get(&p)
+                    .ok_or(format!("node {id} has missing parent {p}"))?;
+                if pn.children.binary_search(&id).is_err() {
+                    return Err(format!("node {id} not among its parent's children"));
+                }
+                if !self.layers[&pn.layer].children.contains(&node.layer) {
+                    return Err(format!("node {id} nested off the DAG"));
+                }
+            }
+            if !node.children.is_sorted()
+                || !node.out_edges.is_sorted_by_key(|e| e.0)
+                || !node.in_edges.is_sorted_by_key(|e| e.0)
+            {
+                return Err(format!("node {id} relation lists not sorted"));
+            }
+            for c in &node.children {
+                if self.nodes.get(c).and_then(|c| c.parent) != Some(id) {
+                    return Err(format!("child {c} of {id} does not point back"));
+                }
+            }
+            for &(t, d) in &node.out_edges {
+                let tn = self
+                    .nodes
+                    .get(&t)
+                    .ok_or(format!("edge {id}->{t} dangles"))?;
+                if tn.layer != node.layer || t == id {
+                    return Err(format!("edge {id}->{t} crosses layers or loops"));
+                }
+                if tn.in_edges.binary_search(&(id, d)).is_err() {
+                    return Err(format!("edge {id}->{t} not mirrored"));
+                }
+            }
+            for &(s, _) in &node.in_edges {
+                if !self
+                    .nodes
+                    .get(&s)
+                    .is_some_and(|sn| sn.out_edges.binary_search_by_key(&id, |e| e.0).is_ok())
+                {
+                    return Err(format!("in-edge {s}->{id} not mirrored"));
+                }
+            }
+            if node.bbox_enabled {
+                let exact = self.brute_subtree_box(id);
+                if node.aabb != exact {
+                    return Err(format!(
+                        "node {id} box {:?} != exact {:?}",
+                        node.aabb, exact
+                    ));
+                }
+            } else if node.aabb.is_some() {
+                return Err(format!("node {id} has a box while disabled"));
+            }
+        }
+        Ok(())
+    }
+
+    fn layer_reaches_strictly(&self, l: LayerId) -> bool {
+        self.layers[&l]
+            .children
+            .iter()
+            .any(|&c| self.layer_reaches(c, l))
+    }
+
+    fn brute_subtree_box(&self, id: NodeId) -> Option<Aabb> {
+        let node = &self.nodes[&id];
+        let mut acc = Aabb::from_points(&node.points);
+        for c in &node.children {
+            if let Some(b) = self.brute_subtree_box(*c) {
+                acc = Some(acc.map_or(b, |a| a.union(&b)));
+            }
+        }
+        acc
+    }
+}
+
+fn node_parent(g: &SceneGraph, id: NodeId) -> Option<NodeId> {
+    g.nodes[&id].parent
+}
+
+fn on_box_boundary(b: &Aabb, p: &Point) -> bool {
+    (0..3).any(|a| p[a] <= b.min[a] || p[a] >= b.max[a])
+}

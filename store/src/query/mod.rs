@@ -1,0 +1,44 @@
+//! Queries, each written once over [`crate::SceneView`] so that the live graph and
+//! archived snapshots answer identically.
+//!
+//! Results that are node sets come back sorted by ascending [`crate::NodeId`]; ranked
+//! results break distance ties by the smaller id.
+
+mod pattern;
+mod traverse;
+
+#[doc(inline)]
+pub use pattern::{
+    edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,
+};
+#[doc(inline)]
+pub use traverse::{Direction, bfs, children, dfs, parent, shortest_path, subgraph, subtree};
+
+use crate::{LayerId, SceneView};
+
+/// Where a query looks: the whole graph or one layer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Scope {
+    /// Every layer.
+    Graph,
+    /// One layer.
+    Layer(LayerId),
+}
+
+impl Scope {
+    /// Whether `layer` is inside this scope.
+    pub fn contains(&self, layer: LayerId) -> bool {
+        match self {
+            Scope::Graph => true,
+            Scope::Layer(l) => *l == layer,
+        }
+    }
+
+    /// The layers of `view` inside this scope.
+    pub fn layers<V: SceneView>(&self, view: &V) -> Vec<LayerId> {
+        match self {
+            Scope::Graph => view.layers().collect(),
+            Scope::Layer(l) => view.layers().filter(|x| x == l).collect(),
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! [`SceneView`]: the one read interface that every query is written against.
+//!
+//! | backend | type | how it answers |
+//! |---|---|---|
+//! | live graph | [`crate::SceneGraph`] | hash map of nodes, per-layer posting sets |
+//! | archived snapshot (file or shared memory) | [`crate::ArchivedScene`] | columns of validated rkyv bytes, zero-copy |
+//!
+//! Every query in [`crate::query`] is generic over `V: SceneView`, so both backends run
+//! the same code and give the same answers (property-tested).
+
+use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
+
+/// A directed edge as a view reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct EdgeRef<'a> {
+    /// Source node.
+    pub source: NodeId,
+    /// Target node.
+    pub target: NodeId,
+    /// The edge's description.
+    pub description: &'a str,
+}
+
+/// Read-only access to a scene graph, live or archived.
+///
+/// Nodes are reached through a cheap handle ([`SceneView::NodeRef`]) so a query looks a
+/// node up once and then reads its columns directly. A handle is valid for as long as
+/// the borrow of the view it came from.
+pub trait SceneView {
+    /// A handle to one node of this view.
+    type NodeRef<'a>: Copy
+    where
+        Self: 'a;
+
+    /// Every layer, in ascending id order.
+    fn layers(&self) -> impl Iterator<Item = LayerId> + '_;
+    /// The name of a layer.
+    fn layer_name(&self, layer: LayerId) -> Option<&str>;
+    /// The layer with this name.
+    fn layer_by_name(&self, name: &str) -> Option<LayerId>;
+    /// Layers this layer encompasses (DAG children), ascending.
+    fn layer_children(&self, layer: LayerId) -> Vec<LayerId>;
+    /// Layers encompassing this layer (DAG parents), ascending.
+    fn layer_parents(&self, layer: LayerId) -> Vec<LayerId>;
+    /// Number of nodes in a layer (0 for an unknown layer).
+    fn layer_len(&self, layer: LayerId) -> usize;
+    /// The nodes of a layer, in no particular order.
+    fn layer_nodes(&self, layer: LayerId) -> impl Iterator<Item = Self::NodeRef<'_>> + '_;
+
+    /// The node with this id.
+    fn node(&self, id: NodeId) -> Option<Self::NodeRef<'_>>;
+    /// A node's id.
+    fn node_id<'a>(&'a self, node: Self::NodeRef<'a>) -> NodeId;
+    /// A node's layer.
+    fn node_layer<'a>(&'a self, node: Self::NodeRef<'a>) -> LayerId;
+    /// A node's geometry (empty if none).
+    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [Point];
+    /// A node's parent.
+    fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId>;
+    /// A node's children, ascending by id.
+    fn children<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [NodeId];
+    /// A node's bounding box, if enabled and its sub-tree has a point.
+    fn aabb<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<Aabb>;
+    /// Edges leaving a node, ascending by target id.
+    fn out_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a;
+    /// Edges entering a node, ascending by source id.
+    fn in_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a;
+    /// A node's labels, in no particular order.
+    fn labels<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = &'a str> + 'a;
+    /// A node's features, in no particular order.
+    fn features<'a>(
+        &'a self,
+        node: Self::NodeRef<'a>,
+    ) -> impl Iterator<Item = (&'a str, FeatureRef<'a>)> + 'a;
+
+    /// Layers holding at least one node with this label (inverted index; O(1) when absent).
+    fn layers_with_label(&self, label: &str) -> impl Iterator<Item = LayerId>;
+    /// Layers holding at least one node with this feature key.
+    fn layers_with_key(&self, key: &str) -> impl Iterator<Item = LayerId>;
+    /// Nodes of `layer` carrying `label` (inverted index).
+    fn nodes_with_label<'a>(
+        &'a self,
+        layer: LayerId,
+        label: &str,
+    ) -> impl Iterator<Item = Self::NodeRef<'a>>;
+    /// Nodes of `layer` carrying feature `key` (inverted index).
+    fn nodes_with_key<'a>(
+        &'a self,
+        layer: LayerId,
+        key: &str,
+    ) -> impl Iterator<Item = Self::NodeRef<'a>>;
+
+    /// A node's feature `key`, if present.
+    fn feature<'a>(&'a self, node: Self::NodeRef<'a>, key: &str) -> Option<FeatureRef<'a>> {
+        self.features(node).find(|(k, _)| *k == key).map(|(_, v)| v)
+    }
+    /// Whether a node carries `label`.
+    fn has_label<'a>(&'a self, node: Self::NodeRef<'a>, label: &str) -> bool {
+        self.labels(node).any(|l| l == label)
+    }
+    /// Total number of nodes.
+    fn node_count(&self) -> usize {
+        self.layers().map(|l| self.layer_len(l)).sum()
+    }
+}
