@@ -846,11 +846,11 @@ impl SceneGraph {
                 }
             }
             for &(s, _) in &node.in_edges {
-                if !self
+                let mirrored = self
                     .nodes
                     .get(&s)
-                    .is_some_and(|sn| sn.out_edges.binary_search_by_key(&id, |e| e.0).is_ok())
-                {
+                    .is_some_and(|sn| sn.out_edges.binary_search_by_key(&id, |e| e.0).is_ok());
+                if !mirrored {
                     return Err(format!("in-edge {s}->{id} not mirrored"));
                 }
             }

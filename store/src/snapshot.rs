@@ -427,7 +427,7 @@ fn unpack_file(bytes: &[u8], what: &str) -> Result<Vec<std::ops::Range<usize>>, 
                 "segment {i} ({off}+{len}) lies outside the file"
             )));
         };
-        if off as usize % SEGMENT_ALIGN != 0 {
+        if !(off as usize).is_multiple_of(SEGMENT_ALIGN) {
             return Err(layout(format!(
                 "segment {i} at offset {off} is not {SEGMENT_ALIGN}-byte aligned"
             )));
@@ -614,7 +614,7 @@ pub fn validate_layer<'a>(
 }
 
 fn check_alignment(bytes: &[u8], what: &str) -> Result<(), SnapshotError> {
-    if bytes.as_ptr() as usize % 16 != 0 {
+    if !(bytes.as_ptr() as usize).is_multiple_of(16) {
         return Err(SnapshotError::Layout {
             what: what.to_owned(),
             reason: "bytes are not 16-byte aligned".into(),
@@ -759,7 +759,53 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks the manifest's layer DAG: unique names, mirrored edges, no cycle. Edges are
+/// known to name listed layers.
+fn check_dag(manifest: &ArchivedManifest) -> Result<(), String> {
+    let mut names: Vec<&str> = manifest.layers.iter().map(|m| m.name.as_str()).collect();
+    names.sort_unstable();
+    if names.windows(2).any(|w| w[0] == w[1]) {
+        return Err("two layers share a name".into());
+    }
+    let position = |id: u32| manifest.layers.iter().position(|m| m.id == id);
+    for m in manifest.layers.iter() {
+        for &c in u32s(&m.children) {
+            let child = &manifest.layers[position(c).ok_or("unknown DAG child")?];
+            if !u32s(&child.parents).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {} -> {c} is not mirrored", m.id));
+            }
+        }
+        for &p in u32s(&m.parents) {
+            let parent = &manifest.layers[position(p).ok_or("unknown DAG parent")?];
+            if !u32s(&parent.children).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {p} -> {} is not mirrored", m.id));
+            }
+        }
+    }
+    // Kahn's algorithm: every layer must be removable, or the DAG has a cycle.
+    let mut indegree: Vec<usize> = manifest.layers.iter().map(|m| m.parents.len()).collect();
+    let mut ready: Vec<usize> = (0..indegree.len()).filter(|&i| indegree[i] == 0).collect();
+    let mut removed = 0;
+    while let Some(i) = ready.pop() {
+        removed += 1;
+        for &c in u32s(&manifest.layers[i].children) {
+            let ci = position(c).ok_or("unknown DAG child")?;
+            indegree[ci] = indegree[ci].saturating_sub(1);
+            if indegree[ci] == 0 {
+                ready.push(ci);
+            }
+        }
+    }
+    if removed != manifest.layers.len() {
+        return Err("the layer DAG has a cycle".into());
+    }
+    Ok(())
+}
+
 // ---- the archived view ----------------------------------------------------------------
+
+/// An archived inverted index: term -> `[start, end)` range of its posting column.
+type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>;
 
 /// A consistent cut of archived layers: the [`SceneView`] over validated bytes from a
 /// `.ygg` file or from shared memory.
@@ -817,6 +863,7 @@ impl<'a> ArchivedScene<'a> {
                 return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
             }
         }
+        check_dag(manifest)?;
         for ls in manifest
             .label_layers
             .values()
@@ -863,10 +910,7 @@ impl<'a> ArchivedScene<'a> {
         term: &str,
         pick: fn(
             &'a ArchivedLayerSegment,
-        ) -> (
-            &'a ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>,
-            &'a ArchivedVec<rkyv::rend::u32_le>,
-        ),
+        ) -> (&'a ArchivedTermIndex, &'a ArchivedVec<rkyv::rend::u32_le>),
     ) -> impl Iterator<Item = ArchivedNodeRef> + 'a {
         let found = self.segment(layer).and_then(|(li, seg)| {
             let (index, postings) = pick(seg);
@@ -951,13 +995,14 @@ impl SceneView for ArchivedScene<'_> {
 
     fn node(&self, id: NodeId) -> Option<ArchivedNodeRef> {
         for (li, m) in self.manifest.layers.iter().enumerate() {
-            if m.min_id.to_native() <= id.0 && id.0 <= m.max_id.to_native() {
-                if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
-                    return Some(ArchivedNodeRef {
-                        layer: li as u32,
-                        row: row as u32,
-                    });
-                }
+            if !(m.min_id.to_native()..=m.max_id.to_native()).contains(&id.0) {
+                continue;
+            }
+            if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
+                return Some(ArchivedNodeRef {
+                    layer: li as u32,
+                    row: row as u32,
+                });
             }
         }
         None
@@ -1061,19 +1106,15 @@ impl SceneView for ArchivedScene<'_> {
         Self::graph_layers(&self.manifest.key_layers, key)
     }
 
-    fn nodes_with_label<'b>(
-        &'b self,
+    fn nodes_with_label(
+        &self,
         layer: LayerId,
         label: &str,
     ) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, label, |s| (&s.label_index, &s.label_postings))
     }
 
-    fn nodes_with_key<'b>(
-        &'b self,
-        layer: LayerId,
-        key: &str,
-    ) -> impl Iterator<Item = ArchivedNodeRef> {
+    fn nodes_with_key(&self, layer: LayerId, key: &str) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, key, |s| (&s.key_index, &s.key_postings))
     }
 }
