@@ -58,7 +58,12 @@ fn demo(objects: u64) -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
     g.save(&path)?;
     let size = std::fs::metadata(&path)?.len();
-    println!("saved {} ({} bytes) in {:.1?}", path.display(), size, t.elapsed());
+    println!(
+        "saved {} ({} bytes) in {:.1?}",
+        path.display(),
+        size,
+        t.elapsed()
+    );
     let t = Instant::now();
     let file = SnapshotFile::open(&path)?;
     println!("opened and validated in {:.1?}", t.elapsed());
@@ -75,7 +80,8 @@ fn demo(objects: u64) -> Result<(), Box<dyn std::error::Error>> {
         query::subtree(&view, room).len(),
         view.node(room).and_then(|n| view.aabb(n))
     );
-    let path_len = query::shortest_path(&view, NodeId(1_000), NodeId(1_010), Direction::Outgoing).map(|p| p.len());
+    let path_len = query::shortest_path(&view, NodeId(1_000), NodeId(1_010), Direction::Outgoing)
+        .map(|p| p.len());
     println!("shortest path 1000 -> 1010: {path_len:?} nodes");
     std::fs::remove_dir_all(&dir)?;
     Ok(())

@@ -9,6 +9,7 @@
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
+mod bbox;
 mod error;
 mod feature;
 mod graph;
