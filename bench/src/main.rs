@@ -20,11 +20,14 @@ enum Command {
         #[arg(long, default_value_t = 20_000)]
         objects: u64,
     },
+    /// Archive size and bytes per node for feature-less graphs of 10k, 100k and 1M nodes.
+    ArchiveSizes,
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     match Cli::parse().command {
         Command::Demo { objects } => demo(objects),
+        Command::ArchiveSizes => archive_sizes(),
     }
 }
 
@@ -84,5 +87,32 @@ fn demo(objects: u64) -> Result<(), Box<dyn std::error::Error>> {
         .map(|p| p.len());
     println!("shortest path 1000 -> 1010: {path_len:?} nodes");
     std::fs::remove_dir_all(&dir)?;
+    Ok(())
+}
+
+/// Prints a markdown table: archive bytes per feature-less node (one point each, nested
+/// under one of 9 rooms), and the same nodes without geometry.
+fn archive_sizes() -> Result<(), Box<dyn std::error::Error>> {
+    println!("| nodes | points per node | archive bytes | bytes per node | bytes per node minus 12 per point |");
+    println!("|---|---|---|---|---|");
+    for n in [10_000u64, 100_000, 1_000_000] {
+        for points in [0usize, 1] {
+            let mut g = SceneGraph::new();
+            let layer = g.add_layer("points")?;
+            for i in 0..n {
+                g.add_node(NodeId(i), layer)?;
+                if points > 0 {
+                    g.set_geometry(NodeId(i), vec![[i as f32, 0.0, 1.0]])?;
+                }
+            }
+            let (manifest, layers) = g.to_segments();
+            let bytes = manifest.len() + layers.iter().map(|l| l.len()).sum::<usize>();
+            let per_node = bytes as f64 / n as f64;
+            println!(
+                "| {n} | {points} | {bytes} | {per_node:.1} | {:.1} |",
+                per_node - 12.0 * points as f64
+            );
+        }
+    }
     Ok(())
 }
