@@ -1,1 +1,3 @@
 //! Yggdrasil scene graph store.
+
+pub mod dsg;
