@@ -10,6 +10,7 @@
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
 mod bbox;
+pub mod dsg;
 mod error;
 mod feature;
 mod graph;
