@@ -93,7 +93,9 @@ fn demo(objects: u64) -> Result<(), Box<dyn std::error::Error>> {
 /// Prints a markdown table: archive bytes per feature-less node (one point each, nested
 /// under one of 9 rooms), and the same nodes without geometry.
 fn archive_sizes() -> Result<(), Box<dyn std::error::Error>> {
-    println!("| nodes | points per node | archive bytes | bytes per node | bytes per node minus 12 per point |");
+    println!(
+        "| nodes | points per node | archive bytes | bytes per node | bytes per node minus 12 per point |"
+    );
     println!("|---|---|---|---|---|");
     for n in [10_000u64, 100_000, 1_000_000] {
         for points in [0usize, 1] {

@@ -19,8 +19,7 @@ fn add_points(node: &mut Node, points: &[Point]) -> bool {
                 node.face_counts = [1; 6];
             }
             Some(b) => {
-                for a in 0..3 {
-                    let c = p[a];
+                for (a, &c) in p.iter().enumerate() {
                     if c < b.min[a] {
                         b.min[a] = c;
                         node.face_counts[a] = 1;
@@ -48,9 +47,9 @@ fn remove_points(node: &mut Node, points: &[Point]) -> bool {
     };
     let mut emptied = false;
     for p in points {
-        for a in 0..3 {
+        for (a, &c) in p.iter().enumerate() {
             for (face, bound) in [(a, b.min[a]), (3 + a, b.max[a])] {
-                if p[a] == bound {
+                if c == bound {
                     let c = &mut node.face_counts[face];
                     *c = c.saturating_sub(1);
                     emptied |= *c == 0;

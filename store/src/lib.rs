@@ -15,6 +15,7 @@ mod error;
 mod feature;
 mod graph;
 mod id;
+pub mod layout;
 mod live_view;
 pub mod query;
 pub mod snapshot;
