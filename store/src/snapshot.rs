@@ -353,6 +353,79 @@ where
         .expect("serializing plain columns into memory cannot fail")
 }
 
+/// A writer that only counts bytes: the first pass of archiving into a buffer of exact
+/// size (a loaned shared-memory sample), so the archive is written once, in place.
+#[derive(Default)]
+struct ByteCounter {
+    pos: usize,
+}
+
+impl rkyv::ser::Positional for ByteCounter {
+    fn pos(&self) -> usize {
+        self.pos
+    }
+}
+
+impl<E> rkyv::ser::Writer<E> for ByteCounter {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), E> {
+        self.pos += bytes.len();
+        Ok(())
+    }
+}
+
+type Serializer<'a, W> =
+    rkyv::api::high::HighSerializer<W, rkyv::ser::allocator::ArenaHandle<'a>, rkyv::rancor::Error>;
+
+fn archived_len_of<T>(value: &T) -> usize
+where
+    T: for<'a> Serialize<Serializer<'a, ByteCounter>>,
+{
+    rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(value, ByteCounter::default())
+        .expect("counting bytes cannot fail")
+        .pos
+}
+
+fn archive_into_slice<T>(value: &T, out: &mut [u8]) -> Result<usize, SnapshotError>
+where
+    T: for<'a, 'b> Serialize<Serializer<'a, rkyv::ser::writer::Buffer<'b>>>,
+{
+    use rkyv::ser::Positional;
+    let len = out.len();
+    let written = rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(
+        value,
+        rkyv::ser::writer::Buffer::from(out),
+    )
+    .map_err(|e| SnapshotError::Layout {
+        what: "archive".into(),
+        reason: format!("{len}-byte buffer: {e}"),
+    })?
+    .pos();
+    Ok(written)
+}
+
+macro_rules! in_place_archiving {
+    ($t:ty) => {
+        impl $t {
+            /// Exact size of this value's archive, for loaning a buffer of that size.
+            pub fn archived_len(&self) -> usize {
+                archived_len_of(self)
+            }
+
+            /// Archives straight into `out` (which must be 16-byte aligned and at least
+            /// [`Self::archived_len`] bytes) and returns the bytes written.
+            ///
+            /// # Errors
+            /// [`SnapshotError::Layout`] when `out` is too small.
+            pub fn archive_into(&self, out: &mut [u8]) -> Result<usize, SnapshotError> {
+                archive_into_slice(self, out)
+            }
+        }
+    };
+}
+
+in_place_archiving!(LayerSegment);
+in_place_archiving!(Manifest);
+
 // ---- the .ygg file ------------------------------------------------------------------
 
 /// First eight bytes of every `.ygg` file.
@@ -1116,5 +1189,35 @@ impl SceneView for ArchivedScene<'_> {
 
     fn nodes_with_key(&self, layer: LayerId, key: &str) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, key, |s| (&s.key_index, &s.key_postings))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn archiving_in_place_gives_the_same_bytes_as_archiving_to_a_vector() {
+        let mut g = SceneGraph::new();
+        let l = g.add_layer("objects").unwrap();
+        for i in 0..50 {
+            g.add_node(NodeId(i), l).unwrap();
+            g.set_geometry(NodeId(i), vec![[i as f32, 1.0, 2.0]])
+                .unwrap();
+            g.add_label(NodeId(i), if i % 2 == 0 { "even" } else { "odd" })
+                .unwrap();
+        }
+        let seg = g.layer_segment(l);
+        let expected = archive(&seg);
+        let len = seg.archived_len();
+        assert_eq!(len, expected.len());
+        let mut out = SegmentBytes::with_capacity(len);
+        out.resize(len, 0);
+        assert_eq!(seg.archive_into(&mut out).unwrap(), len);
+        assert_eq!(out.as_slice(), expected.as_slice());
+        validate_layer(&out, "in place").unwrap();
+        let mut short = SegmentBytes::with_capacity(len);
+        short.resize(len - 1, 0);
+        assert!(seg.archive_into(&mut short).is_err());
     }
 }
