@@ -1,5 +1,7 @@
 //! `ygg-bench`: the Yggdrasil demo and benchmarks.
 
+mod ladder;
+
 use clap::{Parser, Subcommand};
 use std::time::Instant;
 use ygg_store::query::{self, Direction};
