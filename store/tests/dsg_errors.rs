@@ -282,6 +282,11 @@ mod dsg {
         assert_eq!(e.field(), Some("mesh.points[1][0]"), "{e}");
 
         let mut d = doc();
+        d["edges"][3]["info"]["weight"] = Value::Null;
+        let e = err(&d);
+        assert_eq!(e.field(), Some("edges[3].info.weight"), "{e}");
+
+        let mut d = doc();
         d["nodes"][0]["attributes"]["bounding_box"]["world_P_center"][0] = Value::Null;
         let e = err(&d);
         assert_eq!(
