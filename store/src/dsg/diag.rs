@@ -199,6 +199,9 @@ impl<'de, T: Deserialize<'de>> Visitor<'de> for Located<T> {
     }
 }
 
+/// Checks one JSON value against the type the fast parse expects.
+type Check = fn(&Value) -> Result<(), String>;
+
 fn check<'a, T: Deserialize<'a>>(v: &'a Value) -> Result<(), String> {
     T::deserialize(v).map(drop).map_err(|e| e.to_string())
 }
@@ -222,7 +225,7 @@ fn locate(bytes: &[u8]) -> Option<Loc> {
             });
         }
     };
-    let sections: [(&str, &Option<Value>, fn(&Value) -> Result<(), String>); 5] = [
+    let sections: [(&str, &Option<Value>, Check); 5] = [
         ("SPARK_DSG_header", &top.header, |v| {
             check_owned::<Option<RawHeader>>(v)
         }),

@@ -222,8 +222,17 @@ impl<'p> Builder<'p> {
                     .info
                     .as_ref()
                     .filter(|i| i.weighted.unwrap_or(false))
-                    .and_then(|i| i.weight)
-                    .map(|w| w.0);
+                    .map(|i| i.weight.0);
+                if let Some(w) = weight
+                    && !w.is_finite()
+                {
+                    return Err(DsgImportError::NonFinite {
+                        file: self.file,
+                        node: None,
+                        field: format!("edges[{e}].info.weight"),
+                        value: w as f32,
+                    });
+                }
                 edges.push(DsgEdge {
                     source: s,
                     target: t,

@@ -184,8 +184,9 @@ pub struct DsgNode {
     /// claimed by this object, as stored (sorted in practice, duplicates kept). Empty
     /// for other kinds.
     pub mesh_connections: Vec<u32>,
-    /// Agent pose timestamp in nanoseconds (`attributes.timestamp` in v1.1, the
-    /// node-level `timestamp` in legacy files). `None` for other kinds.
+    /// Timestamp in nanoseconds, as agent poses carry it (`attributes.timestamp` in
+    /// v1.1, the node-level `timestamp` in legacy files). `None` when absent, which
+    /// is the case for every other kind in Spark-DSG output.
     pub timestamp_ns: Option<u64>,
     /// The parent node: the higher-layer end of the first inter-layer edge touching
     /// this node, in file order. Later inter-layer edges that would give the node a
@@ -208,7 +209,8 @@ pub struct DsgEdge {
     pub source: u64,
     /// Second node id.
     pub target: u64,
-    /// The edge weight, when `info.weighted` is true.
+    /// The edge weight, when `info.weighted` is true (always finite: the importer
+    /// rejects non-finite weights). Only intra-layer edges keep a weight.
     pub weight: Option<f64>,
 }
 

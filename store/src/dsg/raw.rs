@@ -157,8 +157,9 @@ pub(super) struct RawEdge {
 
 #[derive(Deserialize)]
 pub(super) struct RawEdgeInfo {
-    #[serde(default)]
-    pub weight: Option<Num>,
+    /// `null` (nlohmann's NaN) and a missing weight both read as NaN.
+    #[serde(default = "Num::nan")]
+    pub weight: Num,
     #[serde(default)]
     pub weighted: Option<bool>,
 }
@@ -193,6 +194,12 @@ pub(super) struct RawMetadata {
 /// f64; `null` becomes NaN so the finiteness checks can name the field.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Num(pub f64);
+
+impl Num {
+    fn nan() -> Self {
+        Num(f64::NAN)
+    }
+}
 
 impl<'de> Deserialize<'de> for Num {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
