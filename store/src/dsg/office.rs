@@ -420,56 +420,7 @@ impl Gen {
             labs.extend(std::iter::repeat_n(sem_of(obj_labels[o]), pts.len() - off));
             own_ranges.push((off, pts.len()));
         }
-        // (origin, u, v, mesh label, area) of every floor, ceiling and wall.
-        type Shell = ([f64; 3], [f64; 3], [f64; 3], u32, f64);
-        let mut patches: Vec<Shell> = Vec::new();
-        for &[x0, x1, y0, y1] in &ROOMS {
-            let (lx, ly) = (x1 - x0, y1 - y0);
-            patches.extend([
-                (
-                    [x0, y0, 0.0],
-                    [lx, 0.0, 0.0],
-                    [0.0, ly, 0.0],
-                    MESH_FLOOR,
-                    lx * ly,
-                ),
-                (
-                    [x0, y0, CEILING],
-                    [lx, 0.0, 0.0],
-                    [0.0, ly, 0.0],
-                    MESH_CEILING,
-                    lx * ly,
-                ),
-                (
-                    [x0, y0, 0.0],
-                    [lx, 0.0, 0.0],
-                    [0.0, 0.0, CEILING],
-                    MESH_WALL,
-                    lx * CEILING,
-                ),
-                (
-                    [x0, y1, 0.0],
-                    [lx, 0.0, 0.0],
-                    [0.0, 0.0, CEILING],
-                    MESH_WALL,
-                    lx * CEILING,
-                ),
-                (
-                    [x0, y0, 0.0],
-                    [0.0, ly, 0.0],
-                    [0.0, 0.0, CEILING],
-                    MESH_WALL,
-                    ly * CEILING,
-                ),
-                (
-                    [x1, y0, 0.0],
-                    [0.0, ly, 0.0],
-                    [0.0, 0.0, CEILING],
-                    MESH_WALL,
-                    ly * CEILING,
-                ),
-            ]);
-        }
+        let patches = shell_patches();
         let n_patch = alloc(
             n_unclaimed,
             &patches.iter().map(|p| p.4).collect::<Vec<_>>(),
@@ -509,32 +460,7 @@ impl Gen {
         // ---- claims: own vertices, plus a partner claiming part of them
         let mut claims: Vec<Vec<usize>> =
             own_ranges.iter().map(|&(a, b)| (a..b).collect()).collect();
-        let share_w: Vec<f64> = n_own
-            .iter()
-            .map(|&n| n as f64 * self.uniform(0.3, 1.0))
-            .collect();
-        let mut k_share = alloc(n_multi, &share_w);
-        for _ in 0..100 {
-            let over: usize = k_share
-                .iter()
-                .zip(&n_own)
-                .map(|(k, n)| k.saturating_sub(*n))
-                .sum();
-            if over == 0 {
-                break;
-            }
-            for (k, n) in k_share.iter_mut().zip(&n_own) {
-                *k = (*k).min(*n);
-            }
-            let spare: Vec<usize> = (0..n_obj).filter(|&o| k_share[o] < n_own[o]).collect();
-            let room: Vec<f64> = spare
-                .iter()
-                .map(|&o| (n_own[o] - k_share[o]) as f64)
-                .collect();
-            for (&o, add) in spare.iter().zip(alloc(over, &room)) {
-                k_share[o] += add;
-            }
-        }
+        let k_share = self.share_counts(n_multi, &n_own);
         let obj_grid = Grid::new(&obj_center, 2.0);
         let partner: Vec<usize> = (0..n_obj)
             .map(|o| {
@@ -546,19 +472,14 @@ impl Gen {
                     .unwrap_or(o)
             })
             .collect();
-        if n_obj >= 2 {
-            for o in 0..n_obj {
-                let k = k_share[o];
-                if k == 0 {
-                    continue;
-                }
-                let (a, b) = own_ranges[o];
-                let pc = obj_center[partner[o]];
-                let mut idx: Vec<(f64, usize)> = (a..b).map(|v| (dist(pts[v], pc), v)).collect();
-                idx.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-                claims[partner[o]].extend(idx.iter().take(k).map(|&(_, v)| v));
-            }
-        }
+        add_partner_claims(
+            &mut claims,
+            &own_ranges,
+            &k_share,
+            &partner,
+            &obj_center,
+            &pts,
+        );
 
         // ---- Hydra-like vertex order: by 1.6 m voxel block, then stable
         let perm = block_order(&pts, 1.6);
@@ -582,46 +503,7 @@ impl Gen {
             .collect();
 
         // ---- stored boxes: correct (claims + 1 cm) or wrong (shrunk, shifted)
-        let mut wrong = vec![false; n_obj];
-        for i in rand::seq::index::sample(&mut self.rng, n_obj, n_wrong) {
-            wrong[i] = true;
-        }
-        let mut boxes = Vec::with_capacity(n_obj);
-        for o in 0..n_obj {
-            let (lo, hi) = if claims[o].is_empty() {
-                let (c, h) = (obj_center[o], obj_half[o]);
-                (
-                    [c[0] - h[0], c[1] - h[1], c[2] - h[2]],
-                    [c[0] + h[0], c[1] + h[1], c[2] + h[2]],
-                )
-            } else {
-                let mut lo = [f64::INFINITY; 3];
-                let mut hi = [f64::NEG_INFINITY; 3];
-                for &v in &claims[o] {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(pts[v as usize][k]);
-                        hi[k] = hi[k].max(pts[v as usize][k]);
-                    }
-                }
-                (lo, hi)
-            };
-            let mut dims = [0.0; 3];
-            let mut ctr = [0.0; 3];
-            if wrong[o] {
-                for k in 0..3 {
-                    dims[k] = (hi[k] - lo[k]) * self.uniform(0.6, 0.9);
-                }
-                for k in 0..3 {
-                    ctr[k] = 0.5 * (lo[k] + hi[k]) + (hi[k] - lo[k]) * self.uniform(-0.1, 0.1);
-                }
-            } else {
-                for k in 0..3 {
-                    dims[k] = hi[k] - lo[k] + 0.02;
-                    ctr[k] = 0.5 * (lo[k] + hi[k]);
-                }
-            }
-            boxes.push(stored_box(dims, ctr));
-        }
+        let boxes = self.object_boxes(&claims, &pts, &obj_center, &obj_half, n_wrong);
 
         // ---- places and mesh places
         let p_counts = alloc(n_places, &areas);
@@ -772,19 +654,7 @@ impl Gen {
             });
         }
 
-        let objects_space: BTreeMap<u32, String> = names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| (i as u32, (*n).to_owned()))
-            .collect();
-        let mut mesh_space = objects_space.clone();
-        mesh_space.insert(MESH_WALL, "wall".to_owned());
-        mesh_space.insert(MESH_FLOOR, "floor".to_owned());
-        mesh_space.insert(MESH_CEILING, "ceiling".to_owned());
-        let labelspaces = BTreeMap::from([
-            ("_l2p0".to_owned(), objects_space),
-            ("mesh".to_owned(), mesh_space),
-        ]);
+        let labelspaces = office_labelspaces(&names);
 
         DsgGraph {
             source: format!(
@@ -804,6 +674,91 @@ impl Gen {
             }),
             labelspaces,
         }
+    }
+
+    /// How many of each object's vertices its partner claims too: `n_multi` split
+    /// in proportion to `n_own · U(0.3, 1)`, capped at `n_own` (the excess is
+    /// redistributed to objects with room left).
+    fn share_counts(&mut self, n_multi: usize, n_own: &[usize]) -> Vec<usize> {
+        let share_w: Vec<f64> = n_own
+            .iter()
+            .map(|&n| n as f64 * self.uniform(0.3, 1.0))
+            .collect();
+        let mut k_share = alloc(n_multi, &share_w);
+        for _ in 0..100 {
+            let over: usize = k_share
+                .iter()
+                .zip(n_own)
+                .map(|(k, n)| k.saturating_sub(*n))
+                .sum();
+            if over == 0 {
+                break;
+            }
+            for (k, n) in k_share.iter_mut().zip(n_own) {
+                *k = (*k).min(*n);
+            }
+            let spare: Vec<usize> = (0..n_own.len())
+                .filter(|&o| k_share[o] < n_own[o])
+                .collect();
+            let room: Vec<f64> = spare
+                .iter()
+                .map(|&o| (n_own[o] - k_share[o]) as f64)
+                .collect();
+            for (&o, add) in spare.iter().zip(alloc(over, &room)) {
+                k_share[o] += add;
+            }
+        }
+        k_share
+    }
+
+    /// Stored object boxes: `n_wrong` random objects get a box shrunk to 60–90 %
+    /// and shifted by up to 10 % of their claimed extent (so it misses claimed
+    /// vertices); the others the claimed extent plus 1 cm on every side.
+    fn object_boxes(
+        &mut self,
+        claims: &[Vec<u32>],
+        pts: &[[f64; 3]],
+        centers: &[[f64; 3]],
+        halves: &[[f64; 3]],
+        n_wrong: usize,
+    ) -> Vec<DsgAabb> {
+        let n_obj = claims.len();
+        let mut wrong = vec![false; n_obj];
+        for i in rand::seq::index::sample(&mut self.rng, n_obj, n_wrong) {
+            wrong[i] = true;
+        }
+        let mut boxes = Vec::with_capacity(n_obj);
+        for o in 0..n_obj {
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for &v in &claims[o] {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(pts[v as usize][k]);
+                    hi[k] = hi[k].max(pts[v as usize][k]);
+                }
+            }
+            if claims[o].is_empty() {
+                let (c, h) = (centers[o], halves[o]);
+                lo = [c[0] - h[0], c[1] - h[1], c[2] - h[2]];
+                hi = [c[0] + h[0], c[1] + h[1], c[2] + h[2]];
+            }
+            let mut dims = [0.0; 3];
+            let mut ctr = [0.0; 3];
+            if wrong[o] {
+                for k in 0..3 {
+                    dims[k] = (hi[k] - lo[k]) * self.uniform(0.6, 0.9);
+                }
+                for k in 0..3 {
+                    ctr[k] = 0.5 * (lo[k] + hi[k]) + (hi[k] - lo[k]) * self.uniform(-0.1, 0.1);
+                }
+            } else {
+                for k in 0..3 {
+                    dims[k] = hi[k] - lo[k] + 0.02;
+                    ctr[k] = 0.5 * (lo[k] + hi[k]);
+                }
+            }
+            boxes.push(stored_box(dims, ctr));
+        }
+        boxes
     }
 
     /// Centre and half extents of one object of `label` in room `r`.
@@ -1084,6 +1039,62 @@ fn block_order(pts: &[[f64; 3]], block: f64) -> Vec<usize> {
         start[b] += 1;
     }
     perm
+}
+
+/// A floor, ceiling or wall patch: origin, the two edge vectors, mesh label, area.
+type Shell = ([f64; 3], [f64; 3], [f64; 3], u32, f64);
+
+/// The floor, ceiling and four walls of every room.
+fn shell_patches() -> Vec<Shell> {
+    let mut patches = Vec::with_capacity(6 * ROOMS.len());
+    for &[x0, x1, y0, y1] in &ROOMS {
+        let (lx, ly) = (x1 - x0, y1 - y0);
+        let (ux, uy, up) = ([lx, 0.0, 0.0], [0.0, ly, 0.0], [0.0, 0.0, CEILING]);
+        patches.extend([
+            ([x0, y0, 0.0], ux, uy, MESH_FLOOR, lx * ly),
+            ([x0, y0, CEILING], ux, uy, MESH_CEILING, lx * ly),
+            ([x0, y0, 0.0], ux, up, MESH_WALL, lx * CEILING),
+            ([x0, y1, 0.0], ux, up, MESH_WALL, lx * CEILING),
+            ([x0, y0, 0.0], uy, up, MESH_WALL, ly * CEILING),
+            ([x1, y0, 0.0], uy, up, MESH_WALL, ly * CEILING),
+        ]);
+    }
+    patches
+}
+
+/// The `_l2p0` (objects) and `mesh` labelspaces of the data files.
+fn office_labelspaces(names: &[&str]) -> BTreeMap<String, BTreeMap<u32, String>> {
+    let objects: BTreeMap<u32, String> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i as u32, (*n).to_owned()))
+        .collect();
+    let mut mesh = objects.clone();
+    mesh.insert(MESH_WALL, "wall".to_owned());
+    mesh.insert(MESH_FLOOR, "floor".to_owned());
+    mesh.insert(MESH_CEILING, "ceiling".to_owned());
+    BTreeMap::from([("_l2p0".to_owned(), objects), ("mesh".to_owned(), mesh)])
+}
+
+/// Partner claims: each object `o` hands its `k_share[o]` vertices closest to
+/// `partner[o]`'s centre to `partner[o]` as well (ties to the lower vertex index).
+fn add_partner_claims(
+    claims: &mut [Vec<usize>],
+    own_ranges: &[(usize, usize)],
+    k_share: &[usize],
+    partner: &[usize],
+    centers: &[[f64; 3]],
+    pts: &[[f64; 3]],
+) {
+    for (o, &(a, b)) in own_ranges.iter().enumerate() {
+        let (k, p) = (k_share[o], partner[o]);
+        if k == 0 || p == o {
+            continue;
+        }
+        let mut idx: Vec<(f64, usize)> = (a..b).map(|v| (dist(pts[v], centers[p]), v)).collect();
+        idx.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        claims[p].extend(idx.iter().take(k).map(|&(_, v)| v));
+    }
 }
 
 /// The box a file would store (f32 dimensions and centre), as the importer reads it.
