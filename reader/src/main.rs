@@ -63,6 +63,9 @@ const EXIT_CORRUPT: u8 = 3;
 const EXIT_TIMEOUT: u8 = 4;
 
 fn main() -> ExitCode {
+    // iceoryx2 logs warnings (for example "no config file") on stderr; keep them for
+    // IOX2_LOG_LEVEL=warn and show errors only by default.
+    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
@@ -159,7 +162,15 @@ fn watch(args: &Watch) -> Result<ExitCode, Box<dyn std::error::Error>> {
                 }
                 if args.hold_ms > 0 {
                     held.push(snapshot);
-                    std::thread::sleep(Duration::from_millis(args.hold_ms));
+                    let until = Instant::now() + Duration::from_millis(args.hold_ms);
+                    while Instant::now() < until {
+                        if reader.termination_requested() {
+                            println!("terminated");
+                            println!("received {received} snapshots");
+                            return Ok(ExitCode::SUCCESS);
+                        }
+                        std::thread::sleep(Duration::from_millis(10));
+                    }
                     // Keep the borrow count of a slow reader bounded: hold the newest two.
                     if held.len() > 2 {
                         held.remove(0);

@@ -48,9 +48,9 @@ impl HeldSegment {
         let len = check_segment_header(&header, kind, layer, payload_bytes)?;
         // `Block128` is 128-aligned, so a misaligned payload would be an iceoryx2 bug; checked
         // anyway because the archives inside rely on it.
-        if (ptr as usize) % SEGMENT_ALIGN != 0 {
+        if !ptr.addr().is_multiple_of(SEGMENT_ALIGN) {
             return Err(SegmentError::Misaligned {
-                address: ptr as usize,
+                address: ptr.addr(),
             });
         }
         Ok(Self {

@@ -243,6 +243,13 @@ impl SegmentSubscriber {
         self.status
     }
 
+    /// Whether SIGINT or SIGTERM arrived since the last call (always false unless
+    /// [`ReaderBuilder::handle_termination_signals`] is on). Lets an application that waits
+    /// elsewhere (not in [`wait_next`](Self::wait_next)) notice the request.
+    pub fn termination_requested(&self) -> bool {
+        self.handle_signals && self.node.wait(Duration::ZERO).is_err()
+    }
+
     /// The newest complete snapshot received so far, without receiving anything.
     pub fn current(&self) -> Option<Arc<Snapshot>> {
         self.current.clone()
@@ -316,7 +323,7 @@ impl SegmentSubscriber {
                     });
                 }
             }
-            if self.handle_signals && self.node.wait(Duration::ZERO).is_err() {
+            if self.termination_requested() {
                 return Err(ReceiveError::Terminated);
             }
             if writer_gone {

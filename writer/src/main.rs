@@ -60,6 +60,9 @@ struct ServeTest {
 }
 
 fn main() -> ExitCode {
+    // iceoryx2 logs warnings (for example "no config file") on stderr; keep them for
+    // IOX2_LOG_LEVEL=warn and show errors only by default.
+    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
