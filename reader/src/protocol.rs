@@ -73,9 +73,11 @@ pub const HISTORY_SIZE: usize = 1;
 /// Samples a subscriber buffers. Two cover one publish racing a read (DESIGN.md §5).
 pub const SUBSCRIBER_BUFFER_SIZE: usize = 2;
 
-/// Samples one reader may hold per service: the current snapshot's, up to two newer ones,
-/// and one more for an older snapshot the application still holds.
-pub const SUBSCRIBER_MAX_BORROWED: usize = 4;
+/// Samples one reader may hold per service: the current snapshot's, up to two newer ones
+/// waiting for their manifest, the one being received, and one for an older snapshot the
+/// application still holds. Costs address space only: iceoryx2 reuses freed chunks last-in
+/// first-out, so shared-memory pages are touched only for samples really in use.
+pub const SUBSCRIBER_MAX_BORROWED: usize = 5;
 
 /// Samples the writer may hold on loan per service (it fills one at a time).
 pub const PUBLISHER_MAX_LOANED: usize = 1;

@@ -34,6 +34,9 @@ type SegmentSub = Subscriber<Ipc, [Block128], SegmentHeader>;
 const FAST_CHECK: Duration = Duration::from_millis(5);
 /// How long the fast checks go on after a writer-gone event.
 const FAST_CHECK_WINDOW: Duration = Duration::from_millis(250);
+/// Received layer segments kept per layer beyond the current snapshot's: the subscriber
+/// buffer size, i.e. one publish racing the read (DESIGN.md §5).
+const MAX_PENDING: usize = protocol::SUBSCRIBER_BUFFER_SIZE;
 
 /// Configures and opens a [`SegmentSubscriber`].
 ///
@@ -340,20 +343,18 @@ impl SegmentSubscriber {
     fn sync(&mut self) -> Result<(), ReceiveError> {
         let mut first_error: Option<ReceiveError> = None;
 
-        // 1. Manifests: keep only the newest valid one.
-        let (manifests, error) = drain(&self.manifest);
+        // 1. Manifests: keep only the newest valid one (one at a time, to bound borrows).
+        let manifest_port = &self.manifest;
+        let pending_manifest = &mut self.pending_manifest;
+        let error = drain(manifest_port, |sample| {
+            let manifest = accept_manifest(sample).map_err(|source| ReceiveError::Corrupt {
+                service: manifest_port.name.clone(),
+                source,
+            })?;
+            *pending_manifest = Some(manifest);
+            Ok(())
+        });
         first_error = first_error.or(error);
-        for sample in manifests {
-            match accept_manifest(sample) {
-                Ok(manifest) => self.pending_manifest = Some(manifest),
-                Err(source) => {
-                    first_error.get_or_insert(ReceiveError::Corrupt {
-                        service: self.manifest.name.clone(),
-                        source,
-                    });
-                }
-            }
-        }
 
         // 2. Subscribe to layers the pending manifest names for the first time.
         let mut new_subscribers = false;
@@ -382,34 +383,24 @@ impl SegmentSubscriber {
         }
 
         // 3. Layer segments.
-        let wanted_session = self
-            .pending_manifest
-            .as_ref()
-            .map(|m| m.segment.header().session);
         for (&layer_id, layer) in &mut self.layers {
-            let (samples, error) = drain(&layer.port);
+            // The generation the pending manifest wants from this layer, if any.
+            let wanted = self.pending_manifest.as_ref().and_then(|m| {
+                let entry = m.entries.iter().find(|e| e.layer_id == layer_id)?;
+                Some((m.segment.header().session, entry.generation))
+            });
+            let port = &layer.port;
+            let pending = &mut layer.pending;
+            let error = drain(port, |sample| {
+                let segment = HeldSegment::new(sample, SegmentKind::Layer, Some(layer_id))
+                    .map_err(|source| ReceiveError::Corrupt {
+                        service: port.name.clone(),
+                        source,
+                    })?;
+                keep_pending(pending, wanted, segment);
+                Ok(())
+            });
             first_error = first_error.or(error);
-            for sample in samples {
-                match HeldSegment::new(sample, SegmentKind::Layer, Some(layer_id)) {
-                    Ok(segment) => layer.pending.push(Arc::new(segment)),
-                    Err(source) => {
-                        first_error.get_or_insert(ReceiveError::Corrupt {
-                            service: layer.port.name.clone(),
-                            source,
-                        });
-                    }
-                }
-            }
-            // Bound what is held: segments of another writer session than the newest manifest
-            // are useless, and so are all but the newest few.
-            if let Some(session) = wanted_session {
-                layer.pending.retain(|s| s.header().session == session);
-            }
-            let excess = layer
-                .pending
-                .len()
-                .saturating_sub(protocol::SUBSCRIBER_BUFFER_SIZE + 1);
-            layer.pending.drain(..excess);
         }
 
         // 4. Assemble.
@@ -534,32 +525,54 @@ impl SegmentSubscriber {
     }
 }
 
-/// Receives every sample waiting on `port`; stops at the first failure and returns it.
-fn drain(port: &SubPort) -> (Vec<SegmentSample>, Option<ReceiveError>) {
-    let mut samples = Vec::new();
+/// Receives the samples waiting on `port` one at a time, handing each to `accept` before the
+/// next is received (so at most one extra sample is borrowed). Returns the first failure; a
+/// sample that `accept` rejects is dropped and receiving goes on.
+fn drain(
+    port: &SubPort,
+    mut accept: impl FnMut(SegmentSample) -> Result<(), ReceiveError>,
+) -> Option<ReceiveError> {
+    let mut first_error = None;
     loop {
         match port.subscriber.receive() {
-            Ok(Some(sample)) => samples.push(sample),
-            Ok(None) => return (samples, None),
+            Ok(Some(sample)) => {
+                if let Err(e) = accept(sample) {
+                    first_error.get_or_insert(e);
+                }
+            }
+            Ok(None) => return first_error,
             Err(IoxReceiveError::ExceedsMaxBorrows) => {
-                return (
-                    samples,
-                    Some(ReceiveError::BorrowLimit {
-                        service: port.name.clone(),
-                    }),
-                );
+                return first_error.or(Some(ReceiveError::BorrowLimit {
+                    service: port.name.clone(),
+                }));
             }
             Err(e) => {
-                return (
-                    samples,
-                    Some(ReceiveError::Connection {
-                        service: port.name.clone(),
-                        reason: e.to_string(),
-                    }),
-                );
+                return first_error.or(Some(ReceiveError::Connection {
+                    service: port.name.clone(),
+                    reason: e.to_string(),
+                }));
             }
         }
     }
+}
+
+/// Adds `segment` to a layer's pending segments, dropping those no snapshot can use any more:
+/// other writer sessions, generations older than the one `wanted` by the pending manifest, and
+/// beyond [`MAX_PENDING`] the oldest (a newer manifest will name a newer one).
+fn keep_pending(
+    pending: &mut Vec<Arc<HeldSegment>>,
+    wanted: Option<(u64, u64)>,
+    segment: HeldSegment,
+) {
+    let session = segment.header().session;
+    pending.retain(|s| {
+        let h = s.header();
+        h.session == session && wanted.is_none_or(|(ws, wg)| ws != session || h.generation >= wg)
+    });
+    while pending.len() >= MAX_PENDING {
+        pending.remove(0);
+    }
+    pending.push(Arc::new(segment));
 }
 
 fn accept_manifest(sample: SegmentSample) -> Result<PendingManifest, protocol::SegmentError> {

@@ -735,3 +735,154 @@ fn garbage_segments_are_reported_not_crashed_on() {
     drop(fake);
     scene.assert_no_leftovers(STEP);
 }
+
+#[test]
+fn a_writer_that_exits_cleanly_is_reported_gone_at_once() {
+    let scene = TestScene::new("exit");
+    let dog = Watchdog::new(WATCHDOG);
+    let mut writer = scene.spawn_writer(&["--layers", "2", "--rate", "20"], &dog);
+    writer.expect_line(STEP, |l| l.starts_with("published"));
+    let mut reader = ReaderBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        // A killed writer would take this long to notice; a clean exit is announced.
+        .liveness_interval(Duration::from_secs(3600))
+        .open()
+        .expect("reader");
+    let last = next_snapshot(&mut reader);
+    writer.signal(Signal::TERM);
+    assert!(writer.wait_exit(STEP).success());
+    let start = Instant::now();
+    loop {
+        match reader.wait_next(STEP) {
+            Err(ReceiveError::WriterGone { .. }) => break,
+            Ok(Some(_)) => {}
+            other => panic!("expected WriterGone, got {other:?}"),
+        }
+    }
+    eprintln!("clean writer exit noticed after {:?}", start.elapsed());
+    assert_synthetic(&last);
+    assert!(reader.current().is_some());
+    drop((last, reader));
+    scene.assert_no_leftovers(STEP);
+}
+
+#[test]
+fn readers_beyond_max_readers_get_a_clear_error() {
+    let scene = TestScene::new("crowd");
+    let mut writer = WriterBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .max_readers(1)
+        .create()
+        .expect("writer");
+    writer
+        .publish_layer(1, 1, 16, |b| b.fill(7))
+        .expect("layer");
+    writer
+        .publish_manifest(
+            1,
+            &[ManifestEntry {
+                layer_id: 1,
+                generation: 1,
+            }],
+            0,
+            |_| {},
+        )
+        .expect("manifest");
+    let first = open_reader(&scene);
+    let err = ReaderBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .open()
+        .expect_err("second reader must not fit");
+    assert!(
+        matches!(err, ygg_reader::ReaderOpenError::Port { .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("ygg/"), "{err}");
+    drop((first, writer));
+    scene.assert_no_leftovers(STEP);
+}
+
+#[test]
+fn layers_grow_retire_and_stay_128_byte_aligned() {
+    let scene = TestScene::new("grow");
+    let mut writer = WriterBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .initial_segment_bytes(1024)
+        .create()
+        .expect("writer");
+    let mut reader = open_reader(scene_reader_ready(&scene, &mut writer));
+    assert_eq!(next_snapshot(&mut reader).generation(), 1);
+    let mut generation = 1;
+    for len in [1000, 300_000, 5_000_000, 700] {
+        generation += 1;
+        for layer in [1, 2] {
+            writer
+                .publish_layer(layer, generation, len, |buf| {
+                    assert_eq!(buf.as_ptr().addr() % protocol::SEGMENT_ALIGN, 0);
+                    assert_eq!(buf.len(), len);
+                    test_pattern::write(buf, layer, generation);
+                })
+                .expect("layer");
+        }
+        let entries = [1, 2].map(|layer_id| ManifestEntry {
+            layer_id,
+            generation,
+        });
+        writer
+            .publish_manifest(generation, &entries, 5, |b| {
+                assert_eq!(b.as_ptr().addr() % protocol::SEGMENT_ALIGN, 0);
+                b.copy_from_slice(b"hello");
+            })
+            .expect("manifest");
+        let snapshot = next_snapshot(&mut reader);
+        assert_eq!(snapshot.generation(), generation);
+        assert_eq!(snapshot.layer(1).map(<[u8]>::len), Some(len));
+        assert_synthetic(&snapshot);
+    }
+
+    // Only layer 1 changes; layer 2 leaves the scene.
+    generation += 1;
+    writer
+        .publish_layer(1, generation, 64, |b| test_pattern::write(b, 1, generation))
+        .expect("layer");
+    writer
+        .publish_manifest(
+            generation,
+            &[ManifestEntry {
+                layer_id: 1,
+                generation,
+            }],
+            0,
+            |_| {},
+        )
+        .expect("manifest");
+    writer.retire_layer(2);
+    let snapshot = next_snapshot(&mut reader);
+    assert_eq!(snapshot.layer_count(), 1);
+    assert_eq!(snapshot.layer(2), None);
+    assert_synthetic(&snapshot);
+    drop((snapshot, reader, writer));
+    scene.assert_no_leftovers(STEP);
+}
+
+/// Publishes generation 1 (layer 1 only) so that a reader can open the scene.
+fn scene_reader_ready<'a>(
+    scene: &'a TestScene,
+    writer: &mut ygg_writer::SegmentPublisher,
+) -> &'a TestScene {
+    writer
+        .publish_layer(1, 1, 16, |b| test_pattern::write(b, 1, 1))
+        .expect("layer");
+    writer
+        .publish_manifest(
+            1,
+            &[ManifestEntry {
+                layer_id: 1,
+                generation: 1,
+            }],
+            0,
+            |_| {},
+        )
+        .expect("manifest");
+    scene
+}
