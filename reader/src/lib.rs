@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 mod error;
+pub mod limits;
 pub mod protocol;
 mod segment;
 mod snapshot;

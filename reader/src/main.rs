@@ -67,6 +67,8 @@ fn main() -> ExitCode {
     // IOX2_LOG_LEVEL=warn and show errors only by default.
     iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
+    // Each layer costs about six descriptors; do not stop at a soft limit of 1024.
+    let _ = ygg_reader::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
