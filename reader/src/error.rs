@@ -1,6 +1,6 @@
 //! Errors of the reader: one enum per operation.
 
-use crate::protocol::{PrefixError, SceneNameError, SegmentError};
+use crate::protocol::{ENV_IOX2_PREFIX, PrefixError, SceneNameError, SegmentError};
 
 /// Why [`ReaderBuilder::open`](crate::ReaderBuilder::open) failed.
 #[derive(Debug, thiserror::Error)]
@@ -13,7 +13,8 @@ pub enum ReaderOpenError {
     InvalidPrefix(#[from] PrefixError),
     /// No writer has published this scene (its services do not exist).
     #[error(
-        "no writer publishes scene {scene:?} (is the writer running, with the same iceoryx2 prefix?)"
+        "no writer publishes scene {scene:?} (is the writer running? writer and readers must \
+         share {ENV_IOX2_PREFIX})"
     )]
     NoWriter {
         /// The scene.

@@ -15,10 +15,15 @@ pub(crate) struct SnapshotLayer {
 /// A consistent cut of a scene: one manifest and, for each layer it names, the layer segment of
 /// exactly the generation it names (DESIGN.md §5).
 ///
-/// The bytes stay in the writer's shared memory; the snapshot keeps the samples alive until it
-/// is dropped, so the writer cannot reuse them meanwhile. Unchanged layers are shared (not
-/// re-received) between consecutive snapshots: compare [`Snapshot::layer_generation`] to decide
-/// what to re-validate. A snapshot stays valid after its writer died.
+/// The bytes stay in the writer's shared memory; the snapshot keeps the samples (and the
+/// reader's iceoryx2 ports they came through) alive until it is dropped, so the writer cannot
+/// reuse them meanwhile. A snapshot stays valid after its writer died and after its
+/// [`SegmentSubscriber`](crate::SegmentSubscriber) was dropped.
+///
+/// Unchanged layers are shared, not re-received, between consecutive snapshots: a layer
+/// segment is identified by `(`[`session`](Self::session)`, `[`layer_generation`](Self::layer_generation)`)`,
+/// and two snapshots with the same identity for a layer hand out the very same bytes (same
+/// address). Validate a layer once per identity and reuse the result (DESIGN.md §5).
 ///
 /// Every byte slice starts 128-byte aligned. The bytes are not validated beyond the transport
 /// header: validate archives before use (shared memory is untrusted input).
