@@ -423,11 +423,17 @@ fn manifests_must_name_published_generations() {
 
     let mut reader = open_reader(&scene);
     let snapshot = next_snapshot(&mut reader);
+    // latest() does not block and returns the same snapshot again.
+    let again = reader.latest().expect("latest").expect("a snapshot");
+    assert!(Arc::ptr_eq(&snapshot, &again));
+    assert!(matches!(reader.wait_next(Duration::ZERO), Ok(None)));
+    // A snapshot outlives its reader.
+    drop((again, reader));
     assert_eq!(snapshot.manifest_bytes(), b"abc");
     assert_eq!(snapshot.layer(1), Some(&[1u8; 16][..]));
     assert_eq!(snapshot.layer_generation(2), Some(5));
     assert_eq!(snapshot.layer(3), None);
-    drop((snapshot, reader, writer));
+    drop((snapshot, writer));
     scene.assert_no_leftovers(STEP);
 }
 
