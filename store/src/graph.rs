@@ -66,6 +66,8 @@ pub struct SceneGraph {
     pub(crate) key_layers: FxHashMap<Sym, Vec<LayerId>>,
     /// Incremented when the layer set or the DAG changes.
     pub(crate) structure_generation: u64,
+    /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
+    pub(crate) indexes: crate::index::LiveIndexes,
 }
 
 /// Which inverted index a posting belongs to.
@@ -104,7 +106,7 @@ impl SceneGraph {
         self.nodes.get(&id).ok_or(GraphEditError::UnknownNode(id))
     }
 
-    fn touch(&mut self, layer: LayerId) {
+    pub(crate) fn touch(&mut self, layer: LayerId) {
         if let Some(l) = self.layers.get_mut(&layer) {
             l.generation += 1;
         }
@@ -159,6 +161,7 @@ impl SceneGraph {
         let nodes = layer.nodes.clone();
         let parents = layer.parents.clone();
         let children = layer.children.clone();
+        self.index_layer_removed(id);
         for n in nodes {
             self.remove_node(n)
                 .expect("node listed in its layer exists");
@@ -343,6 +346,7 @@ impl SceneGraph {
             self.nodes.get_mut(&moved).expect("listed").slot = node.slot;
         }
         layer.generation += 1;
+        self.index_node_removed(&node);
         Ok(())
     }
 
@@ -361,6 +365,7 @@ impl SceneGraph {
         let layer = node.layer;
         self.touch(layer);
         self.geometry_changed(id, &old);
+        self.index_geometry_changed(id, &old);
         Ok(())
     }
 
@@ -591,6 +596,7 @@ impl SceneGraph {
         if let Some(added) = self.subtree_box(child) {
             self.grow_ancestor_boxes(parent, &added);
         }
+        self.index_nested(parent, child);
         Ok(())
     }
 
@@ -607,6 +613,7 @@ impl SceneGraph {
         self.touch(pl);
         self.touch(cl);
         self.recompute_ancestor_boxes(parent);
+        self.index_unnested(parent, child);
         Ok(())
     }
 
@@ -866,7 +873,7 @@ impl SceneGraph {
                 return Err(format!("node {id} has a box while disabled"));
             }
         }
-        Ok(())
+        self.check_indexes()
     }
 
     fn layer_reaches_strictly(&self, l: LayerId) -> bool {
