@@ -9,14 +9,21 @@
 //! transport maps samples read-only in the reader; a writer that rewrites a sample after
 //! publishing it breaks the protocol, and is outside what validation can guard.
 
-#![expect(unsafe_code, reason = "re-deriving archives from bytes validated by this module")]
+#![expect(
+    unsafe_code,
+    reason = "re-deriving archives from bytes validated by this module"
+)]
 
-use crate::{ReaderBuilder, ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, WriterStatus};
+use crate::{
+    ReaderBuilder, ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, WriterStatus,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
-use ygg_store::snapshot::{ArchivedScene, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest};
+use ygg_store::snapshot::{
+    ArchivedScene, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,
+};
 
 /// Why no snapshot could be delivered.
 #[derive(Debug, thiserror::Error)]
@@ -95,7 +102,12 @@ impl SceneReader {
 
     /// Wraps an already opened subscriber (for custom [`ReaderBuilder`] settings).
     pub fn with_subscriber(subscriber: SegmentSubscriber) -> Self {
-        SceneReader { subscriber, validated: HashMap::new(), current: None, validations: 0 }
+        SceneReader {
+            subscriber,
+            validated: HashMap::new(),
+            current: None,
+            validations: 0,
+        }
     }
 
     /// The newest snapshot, without blocking (and without ever blocking the writer).
@@ -113,7 +125,10 @@ impl SceneReader {
     ///
     /// # Errors
     /// As [`SceneReader::latest`].
-    pub fn wait_next(&mut self, timeout: Duration) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
+    pub fn wait_next(
+        &mut self,
+        timeout: Duration,
+    ) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
         let snap = self.subscriber.wait_next(timeout)?;
         match snap {
             None => Ok(None),
@@ -142,11 +157,18 @@ impl SceneReader {
         self.subscriber.termination_requested()
     }
 
-    fn accept(&mut self, snap: Option<Arc<Snapshot>>) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
+    fn accept(
+        &mut self,
+        snap: Option<Arc<Snapshot>>,
+    ) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
         let Some(snap) = snap else {
             return Ok(self.current.clone());
         };
-        if self.current.as_ref().is_some_and(|c| Arc::ptr_eq(&c.inner, &snap)) {
+        if self
+            .current
+            .as_ref()
+            .is_some_and(|c| Arc::ptr_eq(&c.inner, &snap))
+        {
             return Ok(self.current.clone());
         }
         let invalid = |source| SceneReceiveError::Invalid {
@@ -158,7 +180,12 @@ impl SceneReader {
         let mut layers = Vec::with_capacity(snap.layer_count());
         let mut newly = Vec::new();
         for (entry, bytes) in snap.layers() {
-            let identity = (snap.session(), entry.generation, bytes.as_ptr() as usize, bytes.len());
+            let identity = (
+                snap.session(),
+                entry.generation,
+                bytes.as_ptr() as usize,
+                bytes.len(),
+            );
             if self.validated.get(&entry.layer_id) == Some(&identity) {
                 // SAFETY: these exact bytes (same address, length and identity) passed
                 // `validate_layer` earlier, and the transport never changes a published sample.
@@ -170,7 +197,10 @@ impl SceneReader {
             }
         }
         ArchivedScene::new(manifest, layers).map_err(|reason| {
-            invalid(SnapshotError::Inconsistent { what: "snapshot".into(), reason })
+            invalid(SnapshotError::Inconsistent {
+                what: "snapshot".into(),
+                reason,
+            })
         })?;
         self.validations += newly.len() as u64;
         self.validated.extend(newly);

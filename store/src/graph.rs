@@ -70,6 +70,8 @@ pub struct SceneGraph {
     pub(crate) key_layers: FxHashMap<Sym, Vec<LayerId>>,
     /// Incremented when the layer set or the DAG changes.
     pub(crate) structure_generation: u64,
+    /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
+    pub(crate) indexes: crate::index::LiveIndexes,
 }
 
 /// Which inverted index a posting belongs to.
@@ -163,6 +165,7 @@ impl SceneGraph {
         let nodes = layer.nodes.clone();
         let parents = layer.parents.clone();
         let children = layer.children.clone();
+        self.index_layer_removed(id);
         for n in nodes {
             self.remove_node(n)
                 .expect("node listed in its layer exists");
@@ -348,6 +351,7 @@ impl SceneGraph {
             self.nodes.get_mut(&moved).expect("listed").slot = node.slot;
         }
         layer.generation += 1;
+        self.index_node_removed(&node);
         Ok(())
     }
 
@@ -366,6 +370,7 @@ impl SceneGraph {
         let layer = node.layer;
         self.touch_layer(layer);
         self.geometry_changed(id, &old);
+        self.index_geometry_changed(id, &old);
         Ok(())
     }
 
@@ -594,6 +599,7 @@ impl SceneGraph {
         self.touch_layer(pl);
         self.touch_layer(cl);
         self.subtree_joined(parent, child);
+        self.index_nested(parent, child);
         Ok(())
     }
 
@@ -610,6 +616,7 @@ impl SceneGraph {
         self.touch_layer(pl);
         self.touch_layer(cl);
         self.subtree_left(parent, child);
+        self.index_unnested(parent, child);
         Ok(())
     }
 
@@ -799,7 +806,7 @@ impl SceneGraph {
                 return Err(format!("node {id} has a box while disabled"));
             }
         }
-        Ok(())
+        self.check_indexes()
     }
 
     fn layer_reaches_strictly(&self, l: LayerId) -> bool {

@@ -4,6 +4,8 @@
 //! * See [`SceneView`] for the one read interface, implemented by the live graph and by
 //!   [`ArchivedScene`] (validated rkyv bytes from a `.ygg` file or shared memory).
 //! * See [`query`] for the queries, written once over [`SceneView`].
+//! * See [`index`] for the spatial indexes (live, archived, reader-built) behind the
+//!   spatial queries.
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file.
 
 #[cfg(not(target_endian = "little"))]
@@ -15,6 +17,7 @@ mod error;
 mod feature;
 mod graph;
 mod id;
+pub mod index;
 pub mod layout;
 mod live_view;
 pub mod query;

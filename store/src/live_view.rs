@@ -2,6 +2,7 @@
 
 use crate::feature::StoredValue;
 use crate::graph::{Node, SceneGraph};
+use crate::index::SpatialIndex;
 use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
 
@@ -155,5 +156,17 @@ impl SceneView for SceneGraph {
             .get(key)
             .and_then(|s| self.layers.get(&layer)?.key_postings.get(&s));
         set.into_iter().flatten().map(|n| &self.nodes[n])
+    }
+
+    fn layer_generation(&self, layer: LayerId) -> Option<u64> {
+        SceneGraph::layer_generation(self, layer)
+    }
+
+    fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
+        self.indexes.layer(layer)
+    }
+
+    fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
+        self.indexes.node(node)
     }
 }

@@ -4,15 +4,19 @@
 //! A snapshot is one **manifest** segment plus one **layer** segment per layer. A layer
 //! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids,
 //! children in CSR form, out- and in-edges in CSR form (rows within the layer), labels,
-//! features, sparse bounding boxes and the inverted label/key indexes. The same
-//! segments travel through shared memory; a `.ygg` file stores them back to back.
+//! features, sparse bounding boxes and the inverted label/key indexes, plus the layer's
+//! spatial indexes: its layer index and the node indexes rooted at its nodes, as kiddo's
+//! archived kd-trees (queried in place; their leaves are 128-byte aligned inside the
+//! 128-byte aligned segment). The same segments travel through shared memory; a `.ygg`
+//! file stores them back to back.
 //!
 //! # Validation
 //! Bytes are untrusted. [`validate_layer`] and [`validate_manifest`] run rkyv's
 //! bytecheck and then [`check_layer`]'s consistency pass (offsets monotonic and in
-//! range, rows in range, ids sorted, string indexes in range), so that every accessor
-//! of [`ArchivedScene`] is total: no index it computes can be out of bounds. Only after
-//! that do we re-derive references with `access_unchecked`.
+//! range, rows in range, ids sorted, string indexes in range, kd-tree shapes, extents and
+//! items in range), so that every accessor of [`ArchivedScene`] is total: no index it
+//! computes can be out of bounds. Only after that do we re-derive references with
+//! `access_unchecked`.
 //!
 //! # Row indexes
 //! Inside a layer segment nodes are addressed by a dense `u32` row (their rank by id).
@@ -24,6 +28,7 @@
 )]
 
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
+use crate::index::{ArchivedIndex, KdTree, SpatialIndex, check_tree};
 use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, SceneGraph, SnapshotError};
 use rkyv::collections::swiss_table::ArchivedHashMap;
@@ -34,7 +39,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Alignment of every segment (kd-tree leaves in archived indexes need 128 bytes).
 pub const SEGMENT_ALIGN: usize = 128;
@@ -106,6 +111,23 @@ pub struct LayerSegment {
     pub key_index: HashMap<String, [u32; 2]>,
     /// Rows per feature key, ascending.
     pub key_postings: Vec<u32>,
+    /// The layer index, if enabled: a kd-tree over every point of the layer whose items
+    /// are rows.
+    pub layer_index: Option<KdTree>,
+    /// The node indexes rooted at nodes of this layer, ascending by root.
+    pub node_indexes: Vec<NodeIndexSegment>,
+}
+
+/// A node index as archived in its root's layer segment.
+#[derive(Archive, Serialize, Debug)]
+pub struct NodeIndexSegment {
+    /// The root node.
+    pub root: u64,
+    /// Ids of the nodes with points in the root's sub-tree, ascending; an item is a
+    /// position in this table.
+    pub ids: Vec<u64>,
+    /// A kd-tree over every point in the sub-tree.
+    pub tree: KdTree,
 }
 
 /// A layer's entry in the manifest.
@@ -260,6 +282,8 @@ impl SceneGraph {
             }
         }
         s.strings = st.strings;
+        s.layer_index = self.archived_layer_index(layer, &ids);
+        s.node_indexes = self.archived_node_indexes(layer);
         s.ids = ids;
         s
     }
@@ -856,6 +880,26 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
             }
         }
     }
+    check_spatial_indexes(l, ids)
+}
+
+/// The spatial part of [`check_layer`]: every kd-tree passes [`check_tree`] with items
+/// bounded by its id table, and node indexes are rooted at this layer's nodes.
+fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), String> {
+    if let Some(tree) = l.layer_index.as_ref() {
+        check_tree(tree, ids.len()).map_err(|e| format!("layer index: {e}"))?;
+    }
+    let mut previous = None;
+    for ni in l.node_indexes.iter() {
+        let root = ni.root.to_native();
+        if previous.is_some_and(|p| p >= root) || ids.binary_search(&root).is_err() {
+            return Err(format!(
+                "node index root {root} unsorted or not in this layer"
+            ));
+        }
+        previous = Some(root);
+        check_tree(&ni.tree, ni.ids.len()).map_err(|e| format!("node index {root}: {e}"))?;
+    }
     Ok(())
 }
 
@@ -988,7 +1032,10 @@ impl<'a> ArchivedScene<'a> {
 
     /// The generation of each layer in this cut, ascending by layer id.
     pub fn layer_generations(&self) -> impl Iterator<Item = (LayerId, u64)> + '_ {
-        self.manifest.layers.iter().map(|m| (LayerId(m.id.to_native()), m.generation.to_native()))
+        self.manifest
+            .layers
+            .iter()
+            .map(|m| (LayerId(m.id.to_native()), m.generation.to_native()))
     }
 
     /// The segment of a layer.
@@ -1226,6 +1273,31 @@ impl SceneView for ArchivedScene<'_> {
 
     fn nodes_with_key(&self, layer: LayerId, key: &str) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, key, |s| (&s.key_index, &s.key_postings))
+    }
+
+    fn layer_generation(&self, layer: LayerId) -> Option<u64> {
+        self.segment(layer).map(|(_, s)| s.generation.to_native())
+    }
+
+    fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
+        let (_, seg) = self.segment(layer)?;
+        // `check_layer` bounded the tree's items by the layer's rows.
+        Some(ArchivedIndex::new(
+            seg.layer_index.as_ref()?,
+            u64s(&seg.ids),
+        ))
+    }
+
+    fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
+        let n = self.node(node)?;
+        let seg = self.seg(n);
+        let at = seg
+            .node_indexes
+            .binary_search_by_key(&node.0, |ni| ni.root.to_native())
+            .ok()?;
+        let ni = &seg.node_indexes[at];
+        // `check_layer` bounded the tree's items by the index's id table.
+        Some(ArchivedIndex::new(&ni.tree, u64s(&ni.ids)))
     }
 }
 

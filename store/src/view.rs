@@ -7,7 +7,13 @@
 //!
 //! Every query in [`crate::query`] is generic over `V: SceneView`, so both backends run
 //! the same code and give the same answers (property-tested).
+//!
+//! Spatial indexes are reached through the view too: [`SceneView::layer_index`] and
+//! [`SceneView::node_index`] return a [`SpatialIndex`] (a [`crate::index::LiveIndex`]
+//! on the live graph, a zero-copy [`crate::index::ArchivedIndex`] on a snapshot), and the
+//! spatial queries use it when present and scan otherwise.
 
+use crate::index::SpatialIndex;
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
 
 /// A directed edge as a view reports it.
@@ -101,5 +107,46 @@ pub trait SceneView {
     /// Total number of nodes.
     fn node_count(&self) -> usize {
         self.layers().map(|l| self.layer_len(l)).sum()
+    }
+
+    /// A layer's generation: it changes whenever the layer's content changes (`None` for
+    /// an unknown layer). Readers key the indexes they build on it.
+    fn layer_generation(&self, layer: LayerId) -> Option<u64>;
+
+    /// The index over every point of `layer`, if this view keeps one.
+    fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
+        let _ = layer;
+        None::<NoIndex>
+    }
+
+    /// The index over every point in `node`'s sub-tree, if this view keeps one.
+    fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
+        let _ = node;
+        None::<NoIndex>
+    }
+}
+
+/// The index type of views that keep no index (uninhabited).
+enum NoIndex {}
+
+impl SpatialIndex for NoIndex {
+    fn len(&self) -> usize {
+        match *self {}
+    }
+
+    fn node_of(&self, _item: u32) -> Option<NodeId> {
+        match *self {}
+    }
+
+    fn nearest_points(&self, _c: &Point, _k: usize, _out: &mut Vec<(f32, u32)>) {
+        match *self {}
+    }
+
+    fn points_within<F: FnMut(f32, u32, &Point)>(&self, _c: &Point, _r2: f32, _f: F) {
+        match *self {}
+    }
+
+    fn memory_bytes(&self) -> usize {
+        match *self {}
     }
 }

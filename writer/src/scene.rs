@@ -48,12 +48,20 @@ impl SceneWriter {
     /// # Errors
     /// As [`WriterBuilder::create`]: an invalid name, or a live writer on this scene.
     pub fn create(scene: &str, graph: SceneGraph) -> Result<Self, WriterCreateError> {
-        Ok(Self::with_publisher(WriterBuilder::new(scene).create()?, graph))
+        Ok(Self::with_publisher(
+            WriterBuilder::new(scene).create()?,
+            graph,
+        ))
     }
 
     /// Wraps an already created publisher (for custom [`WriterBuilder`] settings).
     pub fn with_publisher(publisher: SegmentPublisher, graph: SceneGraph) -> Self {
-        SceneWriter { graph, publisher, published_layers: BTreeSet::new(), generation: 0 }
+        SceneWriter {
+            graph,
+            publisher,
+            published_layers: BTreeSet::new(),
+            generation: 0,
+        }
     }
 
     /// The live graph.
@@ -91,15 +99,19 @@ impl SceneWriter {
             if self.publisher.layer_generation(layer.0) != Some(generation) {
                 let segment = self.graph.layer_segment(*layer);
                 let len = segment.archived_len();
-                self.publisher.try_publish_layer(layer.0, generation, len, |buf| {
-                    segment.archive_into(buf).map(|_| ())
-                })?;
+                self.publisher
+                    .try_publish_layer(layer.0, generation, len, |buf| {
+                        segment.archive_into(buf).map(|_| ())
+                    })?;
                 report.layers_sent += 1;
                 report.bytes_sent += len;
             } else {
                 report.layers_unchanged += 1;
             }
-            entries.push(ManifestEntry { layer_id: layer.0, generation });
+            entries.push(ManifestEntry {
+                layer_id: layer.0,
+                generation,
+            });
         }
         let live: BTreeSet<u32> = layers.iter().map(|l| l.0).collect();
         for gone in self.published_layers.difference(&live) {
@@ -110,7 +122,10 @@ impl SceneWriter {
         let mut manifest = self.graph.manifest(generation);
         manifest.published_unix_ns = unix_ns();
         let len = manifest.archived_len();
-        self.publisher.try_publish_manifest(generation, &entries, len, |buf| manifest.archive_into(buf).map(|_| ()))?;
+        self.publisher
+            .try_publish_manifest(generation, &entries, len, |buf| {
+                manifest.archive_into(buf).map(|_| ())
+            })?;
         self.generation = generation;
         report.generation = generation;
         report.bytes_sent += len;
@@ -120,5 +135,7 @@ impl SceneWriter {
 
 /// Nanoseconds since the Unix epoch (0 if the clock is before it).
 pub fn unix_ns() -> u64 {
-    SystemTime::now().duration_since(SystemTime::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+    SystemTime::now()
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
 }

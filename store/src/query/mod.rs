@@ -3,14 +3,30 @@
 //!
 //! Results that are node sets come back sorted by ascending [`crate::NodeId`]; ranked
 //! results break distance ties by the smaller id.
+//!
+//! Spatial queries ([`nearest_nodes`], [`nodes_within_radius`], [`nearest_in_subtree`],
+//! [`visible`]) use a spatial index when one covers their scope
+//! ([`crate::SceneView::layer_index`], [`crate::SceneView::node_index`]) and scan
+//! otherwise, pruning sub-trees by their bounding boxes; both paths return exactly the
+//! same answer.
 
+mod fov;
 mod pattern;
+mod spatial;
 mod traverse;
 
+#[doc(inline)]
+pub use fov::{ConeView, visible};
 #[doc(inline)]
 pub use pattern::{
     edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,
 };
+#[doc(inline)]
+pub use spatial::{
+    SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes, nodes_within_radius,
+    within_index,
+};
+pub(crate) use traverse::visit_subtree;
 #[doc(inline)]
 pub use traverse::{Direction, bfs, children, dfs, parent, shortest_path, subgraph, subtree};
 

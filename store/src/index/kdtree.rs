@@ -1,0 +1,484 @@
+//! kiddo-backed indexes: [`KdIndex`] (owned, built by a reader) and [`ArchivedIndex`]
+//! (kiddo's archived `ImmutableKdTree` inside a snapshot's layer segment, queried in
+//! place), plus [`check_tree`], the checks that make an archived tree from untrusted
+//! bytes safe to query.
+//!
+//! # Safety of archived trees
+//! rkyv's bytecheck validates an archived kiddo tree's *structure*: every relative
+//! pointer and length stays inside the buffer, buffers are 128-byte aligned, the
+//! stem/leaf resolution enum has a known tag. kiddo's queries also rely on facts that
+//! bytecheck cannot see: the stem array covers every level the traversal descends, each
+//! leaf extent lies inside the leaf arena (leaves are read through raw pointers), the
+//! arithmetic leaf index stays below the leaf count (kiddo panics otherwise), and no
+//! distance is NaN (kiddo sorts results with a comparator that treats NaN as equal,
+//! which a sort may reject with a panic). [`check_tree`] reads those fields through
+//! `TreeLayout`, a `#[repr(C)]` mirror of kiddo 6.3's archived layout (pinned by a size
+//! assertion and by `layout_mirror_reads_what_kiddo_reads`), and checks them once per
+//! segment; it also checks that every item is in range, so queries index tables
+//! without further checks. The pass reads the leaf arena once (16 bytes per point).
+
+#![allow(
+    unsafe_code,
+    reason = "reading the fields of a validated archived kiddo tree through a layout mirror"
+)]
+
+use super::SpatialIndex;
+use crate::{NodeId, Point};
+use kiddo::leaf_strategy::VecOfArenas;
+use kiddo::{Eytzinger, ImmutableKdTree, SquaredEuclidean};
+use rkyv::boxed::ArchivedBox;
+use rkyv::primitive::{ArchivedI32, ArchivedUsize};
+use rkyv::rend::f32_le;
+use rkyv::tuple::ArchivedTuple2;
+use rkyv::vec::ArchivedVec;
+use std::num::NonZeroUsize;
+
+/// The kd-tree of archived and reader-built indexes: kiddo's `ImmutableKdTree` over
+/// `f32` points in 3-D with `u32` items.
+pub type KdTree = ImmutableKdTree<f32, 3>;
+
+/// kiddo's archived form of [`KdTree`], queried in place.
+pub type ArchivedKdTree =
+    kiddo::kd_tree::ArchivedKdTree<f32, u32, Eytzinger, VecOfArenas<f32, u32, 3, 32>, 3, 32>;
+
+/// Radius queries on kiddo trees ask for this much more (relative) and filter exactly:
+/// kiddo updates its pruning bound incrementally, which can round a few ulps high.
+const WITHIN_MARGIN: f32 = 1e-4;
+/// The matching slack of kiddo's `nearest_n` (see [`SpatialIndex::nearest_slack`]).
+const NEAREST_SLACK: f32 = 1e-4;
+
+/// Builds a [`KdTree`] over `(item, point)` entries.
+pub(crate) fn build_tree(entries: &[(u32, Point)]) -> KdTree {
+    KdTree::new_from_entries(entries).expect("u32 items are given, none is generated")
+}
+
+/// The two kiddo tree types queried through one code path.
+macro_rules! kiddo_queries {
+    ($tree:ty) => {
+        impl KiddoTree for $tree {
+            fn points(&self) -> usize {
+                self.size()
+            }
+
+            fn nearest(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
+                out.clear();
+                let Some(k) = NonZeroUsize::new(k.min(self.size())) else {
+                    return;
+                };
+                out.extend(
+                    self.query(c)
+                        .nearest_n::<SquaredEuclidean<f32>>(k)
+                        .execute()
+                        .into_iter()
+                        .map(|r| (r.distance, r.item)),
+                );
+            }
+
+            fn within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, mut f: F) {
+                if self.size() == 0 {
+                    return;
+                }
+                let wide = r2 * (1.0 + WITHIN_MARGIN) + f32::MIN_POSITIVE;
+                self.query(c)
+                    .within::<SquaredEuclidean<f32>>(wide)
+                    .unsorted()
+                    .with_points()
+                    .visit(|r| {
+                        if r.distance <= r2 {
+                            f(r.distance, r.item, &r.point);
+                        }
+                    });
+            }
+        }
+    };
+}
+
+trait KiddoTree {
+    fn points(&self) -> usize;
+    fn nearest(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>);
+    fn within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F);
+}
+
+kiddo_queries!(KdTree);
+kiddo_queries!(ArchivedKdTree);
+
+/// A kd-tree index a reader built from any [`crate::SceneView`] (see
+/// [`super::build_layer_index`]): the tree and the node of each item.
+#[derive(Debug)]
+pub struct KdIndex {
+    tree: KdTree,
+    ids: Vec<NodeId>,
+}
+
+impl KdIndex {
+    pub(crate) fn new(tree: KdTree, ids: Vec<NodeId>) -> Self {
+        KdIndex { tree, ids }
+    }
+}
+
+impl SpatialIndex for KdIndex {
+    fn len(&self) -> usize {
+        self.tree.points()
+    }
+
+    fn node_of(&self, item: u32) -> Option<NodeId> {
+        self.ids.get(item as usize).copied()
+    }
+
+    fn nearest_points(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
+        self.tree.nearest(c, k, out);
+    }
+
+    fn nearest_slack(&self) -> f32 {
+        NEAREST_SLACK
+    }
+
+    fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F) {
+        self.tree.within(c, r2, f);
+    }
+
+    fn memory_bytes(&self) -> usize {
+        let leaves = self.tree.size() * 16 + self.tree.leaf_count() * 16;
+        let stems = 4usize << (self.tree.max_stem_level() + 1).max(0);
+        leaves + stems + self.ids.capacity() * 8
+    }
+}
+
+/// A kd-tree index inside a validated snapshot, queried in place (zero-copy): kiddo's
+/// archived tree and the node ids its items refer to.
+#[derive(Clone, Copy)]
+pub struct ArchivedIndex<'a> {
+    tree: &'a ArchivedKdTree,
+    ids: &'a [u64],
+    bytes: usize,
+}
+
+impl<'a> ArchivedIndex<'a> {
+    /// # Invariant
+    /// `tree` passed [`check_tree`] with an item bound of at most `ids.len()`.
+    pub(crate) fn new(tree: &'a ArchivedKdTree, ids: &'a [u64]) -> Self {
+        let l = layout(tree);
+        let bytes = std::mem::size_of::<ArchivedKdTree>()
+            + l.stems.get().len() * 4
+            + l.leaves.leaf_extents.len()
+                * std::mem::size_of::<ArchivedTuple2<ArchivedUsize, ArchivedUsize>>()
+            + l.leaves.leaf_bytes.get().len();
+        ArchivedIndex { tree, ids, bytes }
+    }
+}
+
+impl std::fmt::Debug for ArchivedIndex<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ArchivedIndex")
+            .field("points", &self.tree.points())
+            .field("nodes", &self.ids.len())
+            .field("bytes", &self.bytes)
+            .finish()
+    }
+}
+
+impl SpatialIndex for ArchivedIndex<'_> {
+    fn len(&self) -> usize {
+        self.tree.points()
+    }
+
+    fn node_of(&self, item: u32) -> Option<NodeId> {
+        self.ids.get(item as usize).map(|&id| NodeId(id))
+    }
+
+    fn nearest_points(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
+        self.tree.nearest(c, k, out);
+    }
+
+    fn nearest_slack(&self) -> f32 {
+        NEAREST_SLACK
+    }
+
+    fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F) {
+        self.tree.within(c, r2, f);
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.bytes
+    }
+}
+
+// ---- validation ----------------------------------------------------------------------
+
+/// kiddo 6.3's archived `VecOfArenas<f32, u32, 3, 32>`, field for field.
+#[repr(C)]
+struct ArenasLayout {
+    leaf_extents: ArchivedVec<ArchivedTuple2<ArchivedUsize, ArchivedUsize>>,
+    leaf_bytes: ArchivedBox<[u8]>,
+    size: ArchivedUsize,
+}
+
+/// kiddo 6.3's archived `OwnedStemLeafResolution`: a `repr(u8)` enum, laid out as a tag
+/// followed by the variant's fields. Tag 0 is `Arithmetic { stems_depth, leaf_count }`;
+/// the largest variant, `Mapped { usize, Vec<usize> }`, sets the size.
+#[repr(C)]
+struct ResolutionLayout {
+    tag: u8,
+    stems_depth: ArchivedUsize,
+    leaf_count: ArchivedUsize,
+    _mapped_tail: ArchivedUsize,
+}
+
+/// kiddo 6.3's archived `KdTree<f32, u32, Eytzinger, VecOfArenas<..>, 3, 32>`, field for
+/// field (`AlignedArchiveSlice<[T]>` has the layout and metadata of `[T]`).
+#[repr(C)]
+struct TreeLayout {
+    stems: ArchivedBox<[f32_le]>,
+    leaves: ArenasLayout,
+    resolution: ResolutionLayout,
+    size: ArchivedUsize,
+    max_stem_level: ArchivedI32,
+    max_leaf_len: ArchivedUsize,
+}
+
+const _: () = assert!(
+    std::mem::size_of::<TreeLayout>() == std::mem::size_of::<ArchivedKdTree>()
+        && std::mem::align_of::<TreeLayout>() == std::mem::align_of::<ArchivedKdTree>()
+);
+
+/// The archived tree's fields, read through the layout mirror.
+fn layout(tree: &ArchivedKdTree) -> &TreeLayout {
+    // SAFETY: `TreeLayout` declares the fields of kiddo 6.3's archived tree in order,
+    // with the same archived field types (rkyv derives `#[repr(C)]` archived structs,
+    // and a `repr(u8)` enum is a tag followed by the variant's `repr(C)` fields); sizes
+    // and alignments are asserted equal above, and `layout_mirror_reads_what_kiddo_reads`
+    // checks the fields read here against kiddo's own accessors. Every `ArchivedKdTree`
+    // reference we hold points into bytes that bytecheck validated, so each mirrored
+    // field holds a valid value (relative pointers in bounds, initialised integers).
+    unsafe { &*(tree as *const ArchivedKdTree).cast::<TreeLayout>() }
+}
+
+/// Leaf tiles, widest first, as kiddo's `VecOfArenas` encodes a leaf: each tile of width
+/// `w` holds `w` x's, `w` y's, `w` z's, then `w` items (16 bytes per point).
+const TILE_WIDTHS: [usize; 5] = [32, 8, 4, 2, 1];
+
+/// Checks what kiddo's queries rely on and bytecheck does not verify (see the module
+/// docs), and that every item is below `items`. Linear in the number of points.
+///
+/// # Errors
+/// A description of the first problem.
+pub(crate) fn check_tree(tree: &ArchivedKdTree, items: usize) -> Result<(), String> {
+    let l = layout(tree);
+    let size = l.size.to_native() as usize;
+    if size == 0 {
+        return Ok(()); // never queried: every query returns at once on an empty tree
+    }
+    if l.resolution.tag != 0 {
+        return Err("kd-tree leaf resolution is not arithmetic".into());
+    }
+    let depth = l.resolution.stems_depth.to_native() as usize;
+    let leaf_count = l.resolution.leaf_count.to_native() as usize;
+    let extents = l.leaves.leaf_extents.as_slice();
+    if depth > 30
+        || leaf_count != 1 << depth
+        || extents.len() != leaf_count
+        || !(-1..depth as i32).contains(&l.max_stem_level.to_native())
+    {
+        return Err(format!(
+            "kd-tree shape: depth {depth}, {leaf_count} leaves, {} extents, max stem level {}",
+            extents.len(),
+            l.max_stem_level.to_native()
+        ));
+    }
+    // Levels 0..=max_stem_level are read, at stem indices below 2^(max_stem_level + 1).
+    let stem_levels = (l.max_stem_level.to_native() + 1) as u32;
+    let stems = l.stems.get();
+    let bytes = l.leaves.leaf_bytes.get();
+    let misaligned = |len: usize, ptr: usize| len > 0 && ptr % 128 != 0;
+    if stems.len() < (1usize << stem_levels) - usize::from(stem_levels == 0)
+        || misaligned(stems.len(), stems.as_ptr() as usize)
+        || misaligned(bytes.len(), bytes.as_ptr() as usize)
+    {
+        return Err("kd-tree stems too short or buffers misaligned".into());
+    }
+    if l.leaves.size.to_native() as usize != size {
+        return Err("kd-tree leaf size differs from tree size".into());
+    }
+    let max_leaf = l.max_leaf_len.to_native() as usize;
+    let mut total = 0usize;
+    for e in extents {
+        let (off, len) = (e.0.to_native() as usize, e.1.to_native() as usize);
+        let end = len.checked_mul(16).and_then(|n| n.checked_add(off));
+        if off % 4 != 0 || len > max_leaf || end.is_none_or(|end| end > bytes.len()) {
+            return Err(format!("kd-tree leaf extent {off}+{len} out of bounds"));
+        }
+        total += len;
+        check_leaf(&bytes[off..off + 16 * len], len, items)?;
+    }
+    if total != size {
+        return Err(format!(
+            "kd-tree leaves hold {total} points, size says {size}"
+        ));
+    }
+    Ok(())
+}
+
+fn check_leaf(mut bytes: &[u8], len: usize, items: usize) -> Result<(), String> {
+    let mut remaining = len;
+    while remaining > 0 {
+        let w = TILE_WIDTHS
+            .into_iter()
+            .find(|&w| remaining >= w)
+            .expect("width 1 fits any remaining > 0");
+        let (coords, rest) = bytes.split_at(12 * w);
+        let (item_bytes, rest) = rest.split_at(4 * w);
+        if coords
+            .chunks_exact(4)
+            .any(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]).is_nan())
+        {
+            return Err("kd-tree leaf holds a NaN coordinate".into());
+        }
+        if item_bytes
+            .chunks_exact(4)
+            .any(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize >= items)
+        {
+            return Err(format!(
+                "kd-tree leaf holds an item out of range (< {items})"
+            ));
+        }
+        bytes = rest;
+        remaining -= w;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distance_squared;
+    use crate::snapshot::SegmentBytes;
+    use rand::{Rng, SeedableRng};
+
+    fn archive(tree: &KdTree) -> SegmentBytes {
+        rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(tree, SegmentBytes::new()).unwrap()
+    }
+
+    fn random_entries(n: usize, seed: u64) -> Vec<(u32, Point)> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|i| {
+                let p = [
+                    rng.gen_range(-50.0..50.0),
+                    rng.gen_range(-50.0..50.0),
+                    rng.gen_range(-5.0..5.0),
+                ];
+                (i as u32, p)
+            })
+            .collect()
+    }
+
+    /// Decodes every leaf through the mirror, as `check_tree` reads it.
+    fn decode(tree: &ArchivedKdTree) -> Vec<(u32, [u32; 3])> {
+        let l = layout(tree);
+        let bytes = l.leaves.leaf_bytes.get();
+        let mut out = Vec::new();
+        for e in l.leaves.leaf_extents.iter() {
+            let (mut off, mut remaining) = (e.0.to_native() as usize, e.1.to_native() as usize);
+            while remaining > 0 {
+                let w = TILE_WIDTHS.into_iter().find(|&w| remaining >= w).unwrap();
+                let word = |i: usize| {
+                    u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap())
+                };
+                for j in 0..w {
+                    out.push((word(3 * w + j), [word(j), word(w + j), word(2 * w + j)]));
+                }
+                off += 16 * w;
+                remaining -= w;
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    #[test]
+    fn layout_mirror_reads_what_kiddo_reads() {
+        for n in [1, 2, 31, 32, 33, 100, 1000, 4097] {
+            let tree = build_tree(&random_entries(n, n as u64));
+            let bytes = archive(&tree);
+            let archived = rkyv::access::<ArchivedKdTree, rkyv::rancor::Error>(&bytes).unwrap();
+            let l = layout(archived);
+            assert_eq!(l.size.to_native() as usize, archived.size());
+            assert_eq!(l.max_stem_level.to_native(), archived.max_stem_level());
+            assert_eq!(l.max_leaf_len.to_native() as usize, archived.max_leaf_len());
+            assert_eq!(l.leaves.leaf_extents.len(), archived.leaf_count());
+            assert_eq!(l.resolution.tag, 0);
+            assert_eq!(
+                l.resolution.leaf_count.to_native() as usize,
+                archived.leaf_count()
+            );
+            let mut expected: Vec<(u32, [u32; 3])> = archived
+                .iter()
+                .map(|(item, p)| (item, p.map(f32::to_bits)))
+                .collect();
+            expected.sort_unstable();
+            assert_eq!(decode(archived), expected);
+            check_tree(archived, n).unwrap();
+            assert!(
+                check_tree(archived, n - 1).is_err(),
+                "item bound is enforced"
+            );
+        }
+    }
+
+    #[test]
+    fn kiddo_distances_equal_distance_squared_bit_for_bit() {
+        let entries = random_entries(5000, 9);
+        let tree = build_tree(&entries);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(10);
+        let mut out = Vec::new();
+        for _ in 0..200 {
+            let c = [
+                rng.gen_range(-60.0..60.0),
+                rng.gen_range(-60.0..60.0),
+                rng.gen_range(-9.0..9.0),
+            ];
+            tree.nearest(&c, 20, &mut out);
+            for &(d, item) in &out {
+                assert_eq!(
+                    d.to_bits(),
+                    distance_squared(&entries[item as usize].1, &c).to_bits()
+                );
+            }
+            tree.within(&c, 30.0, |d, item, p| {
+                assert_eq!(*p, entries[item as usize].1);
+                assert_eq!(d.to_bits(), distance_squared(p, &c).to_bits());
+            });
+        }
+    }
+
+    #[test]
+    fn corrupted_trees_are_rejected_or_safe() {
+        let tree = build_tree(&random_entries(3000, 4));
+        let clean = archive(&tree);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut rejected, mut queried) = (0, 0);
+        for _ in 0..3000 {
+            let mut bytes = clean.clone();
+            for _ in 0..rng.gen_range(1..4) {
+                let at = rng.gen_range(0..bytes.len());
+                bytes[at] ^= 1 << rng.gen_range(0..8);
+            }
+            let Ok(archived) = rkyv::access::<ArchivedKdTree, rkyv::rancor::Error>(&bytes) else {
+                rejected += 1;
+                continue;
+            };
+            if check_tree(archived, 3000).is_err() {
+                rejected += 1;
+                continue;
+            }
+            queried += 1;
+            let mut out = Vec::new();
+            archived.nearest(&[0.0, 0.0, 0.0], 10, &mut out);
+            archived.within(&[1.0, 2.0, 0.0], 100.0, |_, item, _| assert!(item < 3000));
+        }
+        assert!(
+            rejected > 0 && queried > 0,
+            "{rejected} rejected, {queried} queried"
+        );
+    }
+}

@@ -1,0 +1,399 @@
+//! Live indexes of a [`SceneGraph`]: enabling and disabling them, the hooks every
+//! mutation calls to keep them exact, and what the snapshot archives.
+//!
+//! # Invariants (checked by [`SceneGraph::check_indexes`])
+//! - A layer index holds exactly one entry `(point, handle(node))` per point of every
+//!   node of its layer.
+//! - A node index holds exactly one such entry per point of every node in its root's
+//!   sub-tree (the root included).
+//! - Handles are dense `u32`s naming nodes; `ids[handle]` is the node.
+//!
+//! A node index changes when any node below its root changes, so the hooks touch the
+//! root's layer: a node index is republished with its root's layer.
+
+use super::{LiveIndex, LiveKdTree, build_tree};
+use crate::error::{EditResult, GraphEditError};
+use crate::graph::Node;
+use crate::snapshot::NodeIndexSegment;
+use crate::{LayerId, NodeId, Point, SceneGraph};
+use rustc_hash::FxHashMap;
+use std::collections::BTreeMap;
+
+/// The live indexes of a graph and the node handles their items use.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct LiveIndexes {
+    handle_of: FxHashMap<NodeId, u32>,
+    ids: Vec<NodeId>,
+    free: Vec<u32>,
+    layers: BTreeMap<LayerId, LiveKdTree>,
+    nodes: FxHashMap<NodeId, LiveKdTree>,
+}
+
+impl LiveIndexes {
+    fn is_empty(&self) -> bool {
+        self.layers.is_empty() && self.nodes.is_empty()
+    }
+
+    /// The handle of `id`, allocated on first use.
+    fn handle(&mut self, id: NodeId) -> u32 {
+        if let Some(&h) = self.handle_of.get(&id) {
+            return h;
+        }
+        let h = match self.free.pop() {
+            Some(h) => {
+                self.ids[h as usize] = id;
+                h
+            }
+            None => {
+                self.ids.push(id);
+                u32::try_from(self.ids.len() - 1).expect("fewer than 2^32 indexed nodes")
+            }
+        };
+        self.handle_of.insert(id, h);
+        h
+    }
+
+    fn release(&mut self, id: NodeId) {
+        if let Some(h) = self.handle_of.remove(&id) {
+            self.ids[h as usize] = NodeId::NONE;
+            self.free.push(h);
+        }
+    }
+
+    /// The index of `layer`, if enabled.
+    pub(crate) fn layer(&self, layer: LayerId) -> Option<LiveIndex<'_>> {
+        self.layers
+            .get(&layer)
+            .map(|t| LiveIndex::new(t, &self.ids))
+    }
+
+    /// The index of `node`'s sub-tree, if enabled.
+    pub(crate) fn node(&self, node: NodeId) -> Option<LiveIndex<'_>> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        self.nodes.get(&node).map(|t| LiveIndex::new(t, &self.ids))
+    }
+}
+
+fn apply(tree: &mut LiveKdTree, h: u32, old: &[Point], new: &[Point]) {
+    for p in old {
+        let found = tree.remove(*p, h);
+        debug_assert!(found, "indexed point {p:?} missing");
+    }
+    for p in new {
+        tree.insert(*p, h);
+    }
+}
+
+impl SceneGraph {
+    /// Enables the layer index of `layer`: a kd-tree over every point of the layer, kept
+    /// exact by every later mutation. [`crate::query::nearest_nodes`] and
+    /// [`crate::query::nodes_within_radius`] use it at layer and graph scope, and
+    /// snapshots carry it. Enabling an enabled index does nothing.
+    ///
+    /// Cost: building is O(n log n) for the layer's n points; afterwards every change of
+    /// a point in the layer costs one kd-tree update.
+    ///
+    /// # Errors
+    /// [`GraphEditError::UnknownLayer`].
+    pub fn enable_layer_index(&mut self, layer: LayerId) -> EditResult {
+        let l = self
+            .layers
+            .get(&layer)
+            .ok_or(GraphEditError::UnknownLayer(layer))?;
+        if self.indexes.layers.contains_key(&layer) {
+            return Ok(());
+        }
+        let mut entries = Vec::new();
+        for id in &l.nodes {
+            let points = &self.nodes[id].points;
+            if !points.is_empty() {
+                let h = self.indexes.handle(*id);
+                entries.extend(points.iter().map(|&p| super::live::Entry { p, item: h }));
+            }
+        }
+        self.indexes
+            .layers
+            .insert(layer, LiveKdTree::from_entries(entries));
+        self.touch_layer(layer);
+        Ok(())
+    }
+
+    /// Disables the layer index of `layer` (nothing happens if it is not enabled).
+    ///
+    /// # Errors
+    /// [`GraphEditError::UnknownLayer`].
+    pub fn disable_layer_index(&mut self, layer: LayerId) -> EditResult {
+        if !self.layers.contains_key(&layer) {
+            return Err(GraphEditError::UnknownLayer(layer));
+        }
+        if self.indexes.layers.remove(&layer).is_some() {
+            self.touch_layer(layer);
+        }
+        Ok(())
+    }
+
+    /// Enables the node index of `node`: a kd-tree over every point in its sub-tree,
+    /// kept exact as geometry changes below it and as nodes are nested under it or taken
+    /// out. [`crate::query::nearest_in_subtree`] and [`crate::query::visible`] use it,
+    /// and snapshots carry it in the segment of `node`'s layer. Enabling an enabled
+    /// index does nothing.
+    ///
+    /// # Errors
+    /// [`GraphEditError::UnknownNode`].
+    pub fn enable_node_index(&mut self, node: NodeId) -> EditResult {
+        let layer = self
+            .nodes
+            .get(&node)
+            .ok_or(GraphEditError::UnknownNode(node))?
+            .layer;
+        if self.indexes.nodes.contains_key(&node) {
+            return Ok(());
+        }
+        let mut entries = Vec::new();
+        for (id, points) in self.subtree_points(node) {
+            let h = self.indexes.handle(id);
+            entries.extend(
+                points
+                    .into_iter()
+                    .map(|p| super::live::Entry { p, item: h }),
+            );
+        }
+        self.indexes
+            .nodes
+            .insert(node, LiveKdTree::from_entries(entries));
+        self.touch_layer(layer);
+        Ok(())
+    }
+
+    /// Disables the node index of `node` (nothing happens if it is not enabled).
+    ///
+    /// # Errors
+    /// [`GraphEditError::UnknownNode`].
+    pub fn disable_node_index(&mut self, node: NodeId) -> EditResult {
+        let layer = self
+            .nodes
+            .get(&node)
+            .ok_or(GraphEditError::UnknownNode(node))?
+            .layer;
+        if self.indexes.nodes.remove(&node).is_some() {
+            self.touch_layer(layer);
+        }
+        Ok(())
+    }
+
+    /// The nodes with points in `root`'s sub-tree, with their points.
+    fn subtree_points(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
+        let mut out = Vec::new();
+        let mut stack = vec![root];
+        while let Some(id) = stack.pop() {
+            let n = &self.nodes[&id];
+            if !n.points.is_empty() {
+                out.push((id, n.points.clone()));
+            }
+            stack.extend(n.children.iter().copied());
+        }
+        out
+    }
+
+    /// Roots of node indexes on the path from `from` to the top (`from` included).
+    fn indexed_ancestors(&self, from: NodeId) -> Vec<NodeId> {
+        let mut roots = Vec::new();
+        if self.indexes.nodes.is_empty() {
+            return roots;
+        }
+        let mut cur = Some(from);
+        while let Some(n) = cur {
+            if self.indexes.nodes.contains_key(&n) {
+                roots.push(n);
+            }
+            cur = self.nodes[&n].parent;
+        }
+        roots
+    }
+
+    /// Hook: `id`'s points changed from `old` to its current points.
+    pub(crate) fn index_geometry_changed(&mut self, id: NodeId, old: &[Point]) {
+        if self.indexes.is_empty() {
+            return;
+        }
+        let layer = self.nodes[&id].layer;
+        let roots = self.indexed_ancestors(id);
+        let has_layer = self.indexes.layers.contains_key(&layer);
+        if roots.is_empty() && !has_layer {
+            return;
+        }
+        let h = self.indexes.handle(id);
+        let new = &self.nodes[&id].points;
+        if let Some(t) = self.indexes.layers.get_mut(&layer) {
+            apply(t, h, old, new);
+        }
+        let mut touched = Vec::new();
+        for r in roots {
+            apply(self.indexes.nodes.get_mut(&r).expect("listed"), h, old, new);
+            let rl = self.nodes[&r].layer;
+            if rl != layer {
+                touched.push(rl);
+            }
+        }
+        for l in touched {
+            self.touch_layer(l);
+        }
+    }
+
+    /// Hook: `child`'s sub-tree was nested under `parent`.
+    pub(crate) fn index_nested(&mut self, parent: NodeId, child: NodeId) {
+        self.index_subtree_moved(parent, child, true);
+    }
+
+    /// Hook: `child`'s sub-tree was taken out from under `old_parent`.
+    pub(crate) fn index_unnested(&mut self, old_parent: NodeId, child: NodeId) {
+        self.index_subtree_moved(old_parent, child, false);
+    }
+
+    fn index_subtree_moved(&mut self, parent: NodeId, child: NodeId, added: bool) {
+        let roots = self.indexed_ancestors(parent);
+        if roots.is_empty() {
+            return;
+        }
+        let moved: Vec<(u32, Vec<Point>)> = self
+            .subtree_points(child)
+            .into_iter()
+            .map(|(id, points)| (self.indexes.handle(id), points))
+            .collect();
+        for r in roots {
+            let t = self.indexes.nodes.get_mut(&r).expect("listed");
+            for (h, points) in &moved {
+                if added {
+                    apply(t, *h, &[], points);
+                } else {
+                    apply(t, *h, points, &[]);
+                }
+            }
+            let rl = self.nodes[&r].layer;
+            self.touch_layer(rl);
+        }
+    }
+
+    /// Hook: `node` was removed (its nestings were undone first, through the hooks).
+    pub(crate) fn index_node_removed(&mut self, node: &Node) {
+        if self.indexes.is_empty() {
+            return;
+        }
+        self.indexes.nodes.remove(&node.id);
+        if let Some(&h) = self.indexes.handle_of.get(&node.id) {
+            if let Some(t) = self.indexes.layers.get_mut(&node.layer) {
+                apply(t, h, &node.points, &[]);
+            }
+        }
+        self.indexes.release(node.id);
+    }
+
+    /// Hook: `layer` is being removed (before its nodes are).
+    pub(crate) fn index_layer_removed(&mut self, layer: LayerId) {
+        self.indexes.layers.remove(&layer);
+    }
+
+    /// The index of `layer` for a snapshot: a kd-tree over the layer's points whose
+    /// items are rows (ranks of node ids in `ids`, the layer's sorted ids).
+    pub(crate) fn archived_layer_index(
+        &self,
+        layer: LayerId,
+        ids: &[u64],
+    ) -> Option<crate::index::KdTree> {
+        self.indexes.layers.get(&layer)?;
+        let mut entries = Vec::new();
+        for (row, id) in ids.iter().enumerate() {
+            entries.extend(
+                self.nodes[&NodeId(*id)]
+                    .points
+                    .iter()
+                    .map(|p| (row as u32, *p)),
+            );
+        }
+        Some(build_tree(&entries))
+    }
+
+    /// The node indexes rooted in `layer` for a snapshot, ascending by root: items are
+    /// positions in each index's sorted id table.
+    pub(crate) fn archived_node_indexes(&self, layer: LayerId) -> Vec<NodeIndexSegment> {
+        let mut roots: Vec<NodeId> = self
+            .indexes
+            .nodes
+            .keys()
+            .copied()
+            .filter(|r| self.nodes[r].layer == layer)
+            .collect();
+        roots.sort_unstable();
+        roots
+            .into_iter()
+            .map(|root| {
+                let mut members = self.subtree_points(root);
+                members.sort_unstable_by_key(|m| m.0);
+                let mut entries = Vec::new();
+                for (i, (_, points)) in members.iter().enumerate() {
+                    entries.extend(points.iter().map(|p| (i as u32, *p)));
+                }
+                NodeIndexSegment {
+                    root: root.0,
+                    ids: members.iter().map(|m| m.0.0).collect(),
+                    tree: build_tree(&entries),
+                }
+            })
+            .collect()
+    }
+
+    /// Checks the invariants in the module docs: every live index holds exactly the
+    /// points it covers. Meant for tests; it scans every indexed point.
+    ///
+    /// # Errors
+    /// A description of the first index that differs from its scope.
+    pub fn check_indexes(&self) -> Result<(), String> {
+        let expect = |members: Vec<(NodeId, Vec<Point>)>| {
+            let mut v: Vec<(u64, [u32; 3])> = members
+                .into_iter()
+                .flat_map(|(id, ps)| ps.into_iter().map(move |p| (id.0, p.map(f32::to_bits))))
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let actual = |t: &LiveKdTree| -> Result<Vec<(u64, [u32; 3])>, String> {
+            let mut v = Vec::with_capacity(t.len());
+            for e in t.entries() {
+                let id = self.indexes.ids.get(e.item as usize).copied();
+                match id {
+                    Some(id) if self.indexes.handle_of.get(&id) == Some(&e.item) => {
+                        v.push((id.0, e.p.map(f32::to_bits)));
+                    }
+                    _ => return Err(format!("entry with stale handle {}", e.item)),
+                }
+            }
+            v.sort_unstable();
+            Ok(v)
+        };
+        for (&layer, t) in &self.indexes.layers {
+            let l = self
+                .layers
+                .get(&layer)
+                .ok_or(format!("index of missing layer {layer}"))?;
+            let members = l
+                .nodes
+                .iter()
+                .map(|id| (*id, self.nodes[id].points.clone()))
+                .collect();
+            if actual(t)? != expect(members) {
+                return Err(format!("layer index of {layer} differs from its points"));
+            }
+        }
+        for (&root, t) in &self.indexes.nodes {
+            if !self.nodes.contains_key(&root) {
+                return Err(format!("index of missing node {root}"));
+            }
+            if actual(t)? != expect(self.subtree_points(root)) {
+                return Err(format!("node index of {root} differs from its sub-tree"));
+            }
+        }
+        Ok(())
+    }
+}

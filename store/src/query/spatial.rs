@@ -1,0 +1,480 @@
+//! Nearest-neighbour and radius queries: [`nearest_nodes`], [`nodes_within_radius`] and
+//! [`nearest_in_subtree`] over a view, and [`nearest_in_index`] / [`within_index`] over
+//! one [`SpatialIndex`] (for example one a reader built with
+//! [`crate::index::build_layer_index`]).
+//!
+//! # Semantics
+//! - A node's **distance** to `c` is the smallest `distance_squared(p, c).sqrt()` (in
+//!   `f32`) over its points `p`; nodes without points are never returned.
+//! - A node is **within** `r` of `c` when its distance is `<= r`.
+//! - Ranked results ascend by distance; equal distances go to the smaller [`NodeId`].
+//!
+//! Indexed and scanning paths compute distances with the same expression
+//! ([`crate::distance_squared`]), so they agree bit for bit.
+
+use crate::index::SpatialIndex;
+use crate::{NodeId, Point, SceneView, Scope, distance_squared};
+use rustc_hash::FxHashSet;
+
+/// Why a spatial query refused its input. Queries never panic on bad input.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SpatialQueryError {
+    /// A query point (or view eye) has a NaN or infinite coordinate.
+    #[error("point {0:?} has a non-finite coordinate")]
+    NonFinitePoint(Point),
+    /// A radius is negative, NaN or infinite.
+    #[error("radius {0} is negative or not finite")]
+    InvalidRadius(f32),
+    /// A view direction is zero, too small to normalise, or not finite.
+    #[error("view direction {0:?} is zero or not finite")]
+    InvalidDirection(Point),
+    /// A view half-angle is outside `[0, π]` or not finite.
+    #[error("half-angle {0} is not in [0, π] radians")]
+    InvalidHalfAngle(f32),
+    /// A view range is negative, NaN or infinite.
+    #[error("range {0} is negative or not finite")]
+    InvalidRange(f32),
+}
+
+pub(crate) fn check_point(c: &Point) -> Result<(), SpatialQueryError> {
+    if c.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(SpatialQueryError::NonFinitePoint(*c))
+    }
+}
+
+/// The largest squared distance `d2` with `d2.sqrt() <= r`, so that "distance `<= r`"
+/// is exactly "`distance_squared <= radius_bound(r)`" (`sqrt` is monotone).
+pub(crate) fn radius_bound(r: f32) -> f32 {
+    let mut x = r * r;
+    if !x.is_finite() {
+        return f32::MAX;
+    }
+    while x > 0.0 && x.sqrt() > r {
+        x = x.next_down();
+    }
+    while x < f32::MAX && x.next_up().sqrt() <= r {
+        x = x.next_up();
+    }
+    x
+}
+
+/// The best `m` nodes seen so far, ascending by `(distance, id)`.
+pub(crate) struct TopNodes {
+    m: usize,
+    best: Vec<(f32, NodeId)>,
+}
+
+impl TopNodes {
+    pub(crate) fn new(m: usize) -> Self {
+        TopNodes {
+            m,
+            best: Vec::with_capacity(m.min(1024) + 1),
+        }
+    }
+
+    pub(crate) fn offer(&mut self, dist: f32, id: NodeId) {
+        let key = |e: &(f32, NodeId)| (e.0, e.1);
+        let less =
+            |a: (f32, NodeId), b: (f32, NodeId)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+        if self.best.len() == self.m && !less((dist, id), key(&self.best[self.m - 1])) {
+            return;
+        }
+        let at = self.best.partition_point(|e| less(key(e), (dist, id)));
+        self.best.insert(at, (dist, id));
+        self.best.truncate(self.m);
+    }
+
+    /// Whether nothing at distance `>= min_dist` can still enter (strictly farther than
+    /// the current `m`-th node).
+    pub(crate) fn prunes(&self, min_dist: f32) -> bool {
+        self.m == 0 || (self.best.len() == self.m && min_dist > self.best[self.m - 1].0)
+    }
+
+    pub(crate) fn into_vec(self) -> Vec<(NodeId, f32)> {
+        self.best.into_iter().map(|(d, id)| (id, d)).collect()
+    }
+}
+
+/// Offers the exact best `top.m` nodes of `index` to `top`.
+///
+/// Asks the index for the `k` nearest points, growing `k` until the points strictly
+/// closer than the `k`-th one (less the index's slack) name at least `m` distinct nodes:
+/// every node not among them is then strictly farther than each of them, so ties and
+/// multi-point nodes are resolved exactly.
+pub(crate) fn index_nearest<I: SpatialIndex>(index: &I, c: &Point, top: &mut TopNodes) {
+    let m = top.m;
+    if m == 0 || index.is_empty() {
+        return;
+    }
+    let mut k = m.saturating_add(1);
+    let mut points = Vec::new();
+    let mut found: Vec<(f32, u32)> = Vec::new();
+    loop {
+        index.nearest_points(c, k, &mut points);
+        let complete = points.len() < k;
+        let limit = match points.last() {
+            Some(&(d2, _)) if !complete => (d2 * (1.0 - index.nearest_slack())).sqrt(),
+            _ => f32::INFINITY,
+        };
+        found.clear();
+        for &(d2, item) in &points {
+            let dist = d2.sqrt();
+            if !complete && dist >= limit {
+                break;
+            }
+            if found.len() >= m && dist > found[m - 1].0 {
+                break;
+            }
+            if !found.iter().any(|f| f.1 == item) {
+                found.push((dist, item));
+            }
+        }
+        if complete || found.len() >= m {
+            for &(dist, item) in &found {
+                if let Some(id) = index.node_of(item) {
+                    top.offer(dist, id);
+                }
+            }
+            return;
+        }
+        k = k.saturating_mul(4);
+    }
+}
+
+/// Pushes the node of every point of `index` with `distance_squared <= r2`.
+fn index_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32, out: &mut Vec<NodeId>) {
+    let mut items = Vec::new();
+    index.points_within(c, r2, |_, item, _| items.push(item));
+    items.sort_unstable();
+    items.dedup();
+    out.extend(items.into_iter().filter_map(|i| index.node_of(i)));
+}
+
+/// A node's distance to `c` (`None` without points).
+fn node_distance<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
+    view.points(n)
+        .iter()
+        .map(|p| distance_squared(p, c))
+        .min_by(f32::total_cmp)
+        .map(f32::sqrt)
+}
+
+/// At most `m` nodes in `scope` closest to `c`, with their distances.
+///
+/// # Arguments
+/// * `view` – a live graph or an archived snapshot.
+/// * `scope` – the whole graph or one layer.
+/// * `c` – the query point.
+/// * `m` – how many nodes at most (`m` larger than the number of nodes with points
+///   returns them all; 0 returns none).
+///
+/// # Returns
+/// `(node, distance)` pairs, ascending by distance, ties to the smaller id (see the
+/// module docs for the exact semantics).
+///
+/// # Errors
+/// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
+///
+/// # Complexity
+/// Per layer with a layer index: a kd-tree k-nearest search, O(log n + m) for nodes
+/// with one point. Per layer without: a scan of its nodes, skipping nodes whose bounding
+/// box is already farther than the `m`-th best.
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, Scope, query::nearest_nodes};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let places = g.add_layer("places")?;
+/// for (id, x) in [(1, 3.0), (2, 1.0), (3, -1.0)] {
+///     g.add_node(NodeId(id), places)?;
+///     g.set_geometry(NodeId(id), vec![[x, 0.0, 0.0]])?;
+/// }
+/// g.enable_layer_index(places)?;
+/// let want = vec![(NodeId(2), 1.0), (NodeId(3), 1.0)]; // a tie: smaller id first
+/// assert_eq!(nearest_nodes(&g, Scope::Layer(places), [0.0, 0.0, 0.0], 2)?, want);
+/// let snapshot = g.to_snapshot();
+/// assert_eq!(nearest_nodes(&snapshot.view(), Scope::Graph, [0.0, 0.0, 0.0], 2)?, want);
+/// # Ok(()) }
+/// ```
+pub fn nearest_nodes<V: SceneView>(
+    view: &V,
+    scope: Scope,
+    c: Point,
+    m: usize,
+) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
+    check_point(&c)?;
+    let mut top = TopNodes::new(m);
+    if m == 0 {
+        return Ok(Vec::new());
+    }
+    for layer in scope.layers(view) {
+        if let Some(index) = view.layer_index(layer) {
+            index_nearest(&index, &c, &mut top);
+            continue;
+        }
+        for n in view.layer_nodes(layer) {
+            if let Some(b) = view.aabb(n)
+                && top.prunes(b.distance_squared_to(&c).sqrt())
+            {
+                continue;
+            }
+            if let Some(d) = node_distance(view, n, &c) {
+                top.offer(d, view.node_id(n));
+            }
+        }
+    }
+    Ok(top.into_vec())
+}
+
+/// Nodes in `scope` with a point at distance `<= r` from `c`.
+///
+/// # Arguments
+/// * `view` – a live graph or an archived snapshot.
+/// * `scope` – the whole graph or one layer.
+/// * `c` – the centre.
+/// * `r` – the radius (inclusive; 0 finds nodes with a point exactly at `c`).
+///
+/// # Returns
+/// Node ids, ascending.
+///
+/// # Errors
+/// [`SpatialQueryError::NonFinitePoint`] for a non-finite `c`,
+/// [`SpatialQueryError::InvalidRadius`] for a negative or non-finite `r`.
+///
+/// # Complexity
+/// Per layer with a layer index: a kd-tree range search, O(log n + k log k) for k points
+/// found. Per layer without: a scan of its nodes, skipping nodes whose bounding box lies
+/// outside the ball.
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, Scope, query::nodes_within_radius};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let objects = g.add_layer("objects")?;
+/// g.add_node(NodeId(7), objects)?;
+/// g.set_geometry(NodeId(7), vec![[5.0, 0.0, 0.0], [0.5, 0.0, 0.0]])?; // two points
+/// g.add_node(NodeId(8), objects)?;
+/// g.set_geometry(NodeId(8), vec![[2.0, 0.0, 0.0]])?;
+/// g.enable_layer_index(objects)?;
+/// assert_eq!(nodes_within_radius(&g, Scope::Graph, [0.0, 0.0, 0.0], 1.0)?, vec![NodeId(7)]);
+/// let snapshot = g.to_snapshot();
+/// let found = nodes_within_radius(&snapshot.view(), Scope::Layer(objects), [0.0, 0.0, 0.0], 2.0)?;
+/// assert_eq!(found, vec![NodeId(7), NodeId(8)]);
+/// # Ok(()) }
+/// ```
+pub fn nodes_within_radius<V: SceneView>(
+    view: &V,
+    scope: Scope,
+    c: Point,
+    r: f32,
+) -> Result<Vec<NodeId>, SpatialQueryError> {
+    check_point(&c)?;
+    if !(r.is_finite() && r >= 0.0) {
+        return Err(SpatialQueryError::InvalidRadius(r));
+    }
+    let r2 = radius_bound(r);
+    let mut out = Vec::new();
+    for layer in scope.layers(view) {
+        if let Some(index) = view.layer_index(layer) {
+            index_within(&index, &c, r2, &mut out);
+            continue;
+        }
+        for n in view.layer_nodes(layer) {
+            if view.aabb(n).is_some_and(|b| b.distance_squared_to(&c) > r2) {
+                continue;
+            }
+            if view.points(n).iter().any(|p| distance_squared(p, &c) <= r2) {
+                out.push(view.node_id(n));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}
+
+/// At most `m` nodes of `root`'s sub-tree (`root` included) closest to `c`, with their
+/// distances. Runs over the whole graph: the sub-tree spans layers.
+///
+/// # Arguments
+/// * `view` – a live graph or an archived snapshot.
+/// * `root` – the sub-tree's root (an unknown root gives an empty answer).
+/// * `c` – the query point.
+/// * `m` – how many nodes at most.
+///
+/// # Returns
+/// `(node, distance)` pairs, ascending by distance, ties to the smaller id.
+///
+/// # Errors
+/// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
+///
+/// # Complexity
+/// With a node index on `root`: a kd-tree k-nearest search. Otherwise a walk of the
+/// sub-tree that uses the node index of any node below it for that node's sub-tree and
+/// skips sub-trees whose bounding box is farther than the `m`-th best.
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, query::nearest_in_subtree};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let (rooms, objects) = (g.add_layer("rooms")?, g.add_layer("objects")?);
+/// g.add_layer_edge(rooms, objects)?;
+/// for room in [1, 2] { g.add_node(NodeId(room), rooms)?; }
+/// for (id, room, x) in [(10, 1, 4.0), (11, 1, 2.0), (20, 2, 0.5)] {
+///     g.add_node(NodeId(id), objects)?;
+///     g.set_geometry(NodeId(id), vec![[x, 0.0, 0.0]])?;
+///     g.nest(NodeId(room), NodeId(id))?;
+/// }
+/// g.enable_node_index(NodeId(1))?;
+/// let want = vec![(NodeId(11), 2.0)]; // object 20 is closer but in another room
+/// assert_eq!(nearest_in_subtree(&g, NodeId(1), [0.0, 0.0, 0.0], 1)?, want);
+/// assert_eq!(nearest_in_subtree(&g.to_snapshot().view(), NodeId(1), [0.0, 0.0, 0.0], 1)?, want);
+/// # Ok(()) }
+/// ```
+pub fn nearest_in_subtree<V: SceneView>(
+    view: &V,
+    root: NodeId,
+    c: Point,
+    m: usize,
+) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
+    check_point(&c)?;
+    let mut top = TopNodes::new(m);
+    let Some(r) = view.node(root) else {
+        return Ok(Vec::new());
+    };
+    if m == 0 {
+        return Ok(Vec::new());
+    }
+    let mut stack = vec![r];
+    let mut seen = FxHashSet::default();
+    while let Some(n) = stack.pop() {
+        let id = view.node_id(n);
+        if !seen.insert(id) {
+            continue; // only a damaged snapshot can nest a node twice
+        }
+        if let Some(index) = view.node_index(id) {
+            index_nearest(&index, &c, &mut top);
+            continue;
+        }
+        if let Some(b) = view.aabb(n)
+            && top.prunes(b.distance_squared_to(&c).sqrt())
+        {
+            continue;
+        }
+        if let Some(d) = node_distance(view, n, &c) {
+            top.offer(d, id);
+        }
+        stack.extend(view.children(n).iter().filter_map(|&ch| view.node(ch)));
+    }
+    Ok(top.into_vec())
+}
+
+/// At most `m` nodes of one index closest to `c` (the same semantics as
+/// [`nearest_nodes`]); for indexes a reader built itself.
+///
+/// # Errors
+/// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, index::build_layer_index, query::nearest_in_index};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let mesh = g.add_layer("mesh")?;
+/// g.add_node(NodeId(4), mesh)?;
+/// g.set_geometry(NodeId(4), vec![[0.0, 3.0, 4.0]])?;
+/// let index = build_layer_index(&g, mesh);
+/// assert_eq!(nearest_in_index(&index, [0.0; 3], 5)?, vec![(NodeId(4), 5.0)]);
+/// let index = build_layer_index(&g.to_snapshot().view(), mesh);
+/// assert_eq!(nearest_in_index(&index, [0.0; 3], 5)?, vec![(NodeId(4), 5.0)]);
+/// # Ok(()) }
+/// ```
+pub fn nearest_in_index<I: SpatialIndex>(
+    index: &I,
+    c: Point,
+    m: usize,
+) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
+    check_point(&c)?;
+    let mut top = TopNodes::new(m);
+    index_nearest(index, &c, &mut top);
+    Ok(top.into_vec())
+}
+
+/// Nodes of one index with a point at distance `<= r` from `c`, ascending (the same
+/// semantics as [`nodes_within_radius`]).
+///
+/// # Errors
+/// As [`nodes_within_radius`].
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, index::build_layer_index, query::within_index};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let mesh = g.add_layer("mesh")?;
+/// g.add_node(NodeId(4), mesh)?;
+/// g.set_geometry(NodeId(4), vec![[0.0, 3.0, 4.0]])?;
+/// let index = build_layer_index(&g.to_snapshot().view(), mesh);
+/// assert_eq!(within_index(&index, [0.0; 3], 5.0)?, vec![NodeId(4)]);
+/// assert!(within_index(&index, [0.0; 3], 4.9)?.is_empty());
+/// assert_eq!(within_index(&build_layer_index(&g, mesh), [0.0; 3], 5.0)?, vec![NodeId(4)]);
+/// # Ok(()) }
+/// ```
+pub fn within_index<I: SpatialIndex>(
+    index: &I,
+    c: Point,
+    r: f32,
+) -> Result<Vec<NodeId>, SpatialQueryError> {
+    check_point(&c)?;
+    if !(r.is_finite() && r >= 0.0) {
+        return Err(SpatialQueryError::InvalidRadius(r));
+    }
+    let mut out = Vec::new();
+    index_within(index, &c, radius_bound(r), &mut out);
+    out.sort_unstable();
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn radius_bound_is_the_largest_square_with_root_within_r() {
+        for r in [
+            0.0f32,
+            1e-30,
+            1e-20,
+            0.1,
+            0.5,
+            1.0,
+            3.3,
+            1234.5,
+            1e18,
+            1e19,
+            2e19,
+            f32::MAX,
+        ] {
+            let b = radius_bound(r);
+            assert!(b.sqrt() <= r, "{r}: {b}");
+            if b < f32::MAX {
+                assert!(b.next_up().sqrt() > r, "{r}: {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn top_nodes_orders_by_distance_then_id() {
+        let mut t = TopNodes::new(2);
+        t.offer(1.0, NodeId(5));
+        t.offer(1.0, NodeId(3));
+        t.offer(1.0, NodeId(4));
+        t.offer(0.5, NodeId(9));
+        assert_eq!(t.into_vec(), vec![(NodeId(9), 0.5), (NodeId(3), 1.0)]);
+    }
+}
