@@ -324,8 +324,9 @@ fn spark_dsg_anchor(
     let input = match &args.dsg {
         Some(p) => p.clone(),
         None => {
-            let _ = dsg;
-            return Err("the built-in office has no JSON export yet: pass --dsg FILE".into());
+            let p = dir.join("office.json");
+            dsg::write_json(dsg, &p)?;
+            p
         }
     };
     let wpath = dir.join("workload.json");
