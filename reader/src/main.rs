@@ -3,6 +3,8 @@
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+mod roles;
+
 use clap::{Parser, Subcommand};
 use ygg_reader::{
     ReaderBuilder, ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, test_pattern,
@@ -25,6 +27,9 @@ enum Command {
     Watch(Watch),
     /// Print the current snapshot once and exit.
     Dump(Dump),
+    /// Run a demo consumer (planner, visibility, labels) on a live scene, printing JSON
+    /// progress and a summary line.
+    Role(roles::RoleArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -72,6 +77,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
+        Command::Role(args) => roles::run(&args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,
