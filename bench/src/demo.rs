@@ -43,11 +43,22 @@ struct Proc {
 /// Finds (building if needed) the `ygg-writer` and `ygg-reader` binaries.
 fn binaries() -> Result<(PathBuf, PathBuf), Box<dyn std::error::Error>> {
     let exe = std::env::current_exe()?;
-    let dir = exe.parent().ok_or("cannot locate the binary directory")?.to_path_buf();
+    let dir = exe
+        .parent()
+        .ok_or("cannot locate the binary directory")?
+        .to_path_buf();
     if let Ok(cargo) = std::env::var("CARGO") {
         let release = dir.ends_with("release");
         let mut cmd = Command::new(cargo);
-        cmd.args(["build", "-q", "-p", "ygg-writer", "-p", "ygg-reader", "--bins"]);
+        cmd.args([
+            "build",
+            "-q",
+            "-p",
+            "ygg-writer",
+            "-p",
+            "ygg-reader",
+            "--bins",
+        ]);
         if release {
             cmd.arg("--release");
         }
@@ -58,13 +69,24 @@ fn binaries() -> Result<(PathBuf, PathBuf), Box<dyn std::error::Error>> {
     let (w, r) = (dir.join("ygg-writer"), dir.join("ygg-reader"));
     for b in [&w, &r] {
         if !b.exists() {
-            return Err(format!("{} not found: run `cargo build --release --workspace` first", b.display()).into());
+            return Err(format!(
+                "{} not found: run `cargo build --release --workspace` first",
+                b.display()
+            )
+            .into());
         }
     }
     Ok((w, r))
 }
 
-fn spawn(bin: &Path, args: &[String], prefix: &str, log: &Path, id: usize, tx: mpsc::Sender<(usize, Value)>) -> Result<Child, Box<dyn std::error::Error>> {
+fn spawn(
+    bin: &Path,
+    args: &[String],
+    prefix: &str,
+    log: &Path,
+    id: usize,
+    tx: mpsc::Sender<(usize, Value)>,
+) -> Result<Child, Box<dyn std::error::Error>> {
     let mut child = Command::new(bin)
         .args(args)
         .env("YGG_IOX2_PREFIX", prefix)
@@ -113,35 +135,86 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
     let multi = MultiProgress::new();
     let style = ProgressStyle::with_template("{prefix:>12} [{elapsed_precise}] {bar:30} {msg}")?;
 
-    println!("Yggdrasil demo: one writer, {} readers, scene {scene}, {:.0} s", args.readers, args.seconds);
+    println!(
+        "Yggdrasil demo: one writer, {} readers, scene {scene}, {:.0} s",
+        args.readers, args.seconds
+    );
     let writer_args: Vec<String> = vec![
-        "serve".into(), "--scene".into(), scene.clone(),
-        "--seconds".into(), format!("{}", args.seconds + 30.0),
-        "--rate".into(), format!("{}", args.rate),
-        "--scale".into(), format!("{}", args.scale),
+        "serve".into(),
+        "--scene".into(),
+        scene.clone(),
+        "--seconds".into(),
+        format!("{}", args.seconds + 30.0),
+        "--rate".into(),
+        format!("{}", args.rate),
+        "--scale".into(),
+        format!("{}", args.scale),
     ];
-    let writer = spawn(&writer_bin, &writer_args, &prefix, &logs.join("writer.log"), 0, tx.clone())?;
-    let bar = multi.add(ProgressBar::new((args.seconds * 10.0) as u64).with_style(style.clone()).with_prefix("writer"));
+    let writer = spawn(
+        &writer_bin,
+        &writer_args,
+        &prefix,
+        &logs.join("writer.log"),
+        0,
+        tx.clone(),
+    )?;
+    let bar = multi.add(
+        ProgressBar::new((args.seconds * 10.0) as u64)
+            .with_style(style.clone())
+            .with_prefix("writer"),
+    );
     bar.set_message("building the office...");
-    let mut procs = vec![Proc { name: "writer".into(), child: writer, bar, summary: None }];
+    let mut procs = vec![Proc {
+        name: "writer".into(),
+        child: writer,
+        bar,
+        summary: None,
+    }];
 
     // Wait for the writer to serve.
-    let ready = wait_for(&rx, &mut procs, &stop, Duration::from_secs(120), |id, v| id == 0 && v["event"] == "ready");
+    let ready = wait_for(&rx, &mut procs, &stop, Duration::from_secs(120), |id, v| {
+        id == 0 && v["event"] == "ready"
+    });
     if !ready {
         shutdown(&mut procs);
-        return Err(format!("the writer did not start; see {}", logs.join("writer.log").display()).into());
+        return Err(format!(
+            "the writer did not start; see {}",
+            logs.join("writer.log").display()
+        )
+        .into());
     }
     let start = Instant::now();
     for i in 0..args.readers {
         let role = ROLES[i % ROLES.len()];
         let name = format!("{role}-{i}");
         let a: Vec<String> = vec![
-            "role".into(), "--scene".into(), scene.clone(), "--role".into(), role.into(),
-            "--seconds".into(), format!("{}", args.seconds),
+            "role".into(),
+            "--scene".into(),
+            scene.clone(),
+            "--role".into(),
+            role.into(),
+            "--seconds".into(),
+            format!("{}", args.seconds),
         ];
-        let child = spawn(&reader_bin, &a, &prefix, &logs.join(format!("{name}.log")), i + 1, tx.clone())?;
-        let bar = multi.add(ProgressBar::new((args.seconds * 10.0) as u64).with_style(style.clone()).with_prefix(name.clone()));
-        procs.push(Proc { name, child, bar, summary: None });
+        let child = spawn(
+            &reader_bin,
+            &a,
+            &prefix,
+            &logs.join(format!("{name}.log")),
+            i + 1,
+            tx.clone(),
+        )?;
+        let bar = multi.add(
+            ProgressBar::new((args.seconds * 10.0) as u64)
+                .with_style(style.clone())
+                .with_prefix(name.clone()),
+        );
+        procs.push(Proc {
+            name,
+            child,
+            bar,
+            summary: None,
+        });
     }
     drop(tx);
     let mut interrupted = false;
@@ -159,11 +232,19 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         let elapsed = (start.elapsed().as_secs_f64() * 10.0) as u64;
         procs[0].bar.set_position(elapsed);
-        let readers_done = procs[1..].iter_mut().all(|p| matches!(p.child.try_wait(), Ok(Some(_))));
-        if readers_done && procs[0].summary.is_none() && matches!(procs[0].child.try_wait(), Ok(None)) {
+        let readers_done = procs[1..]
+            .iter_mut()
+            .all(|p| matches!(p.child.try_wait(), Ok(Some(_))));
+        if readers_done
+            && procs[0].summary.is_none()
+            && matches!(procs[0].child.try_wait(), Ok(None))
+        {
             signal(&procs[0].child, rustix::process::Signal::TERM);
         }
-        if procs.iter_mut().all(|p| matches!(p.child.try_wait(), Ok(Some(_)))) {
+        if procs
+            .iter_mut()
+            .all(|p| matches!(p.child.try_wait(), Ok(Some(_))))
+        {
             while let Ok((id, v)) = rx.try_recv() {
                 handle(&mut procs[id], &v);
             }
@@ -180,15 +261,32 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         println!("shared memory: nothing left in /dev/shm");
         let _ = std::fs::remove_dir_all(&logs);
     } else {
-        println!("shared memory left behind: {leftovers:?} (logs in {})", logs.display());
+        println!(
+            "shared memory left behind: {leftovers:?} (logs in {})",
+            logs.display()
+        );
     }
-    let checked: u64 = procs.iter().filter_map(|p| p.summary.as_ref()?["checked"].as_u64()).sum();
-    let matched: u64 = procs.iter().filter_map(|p| p.summary.as_ref()?["matched"].as_u64()).sum();
+    let checked: u64 = procs
+        .iter()
+        .filter_map(|p| p.summary.as_ref()?["checked"].as_u64())
+        .sum();
+    let matched: u64 = procs
+        .iter()
+        .filter_map(|p| p.summary.as_ref()?["matched"].as_u64())
+        .sum();
     if checked != matched {
-        return Err(format!("{} of {checked} checked answers differ from brute force", checked - matched).into());
+        return Err(format!(
+            "{} of {checked} checked answers differ from brute force",
+            checked - matched
+        )
+        .into());
     }
     if procs.iter().any(|p| p.summary.is_none()) && !interrupted {
-        return Err(format!("a process ended without a summary; logs in {}", logs.display()).into());
+        return Err(format!(
+            "a process ended without a summary; logs in {}",
+            logs.display()
+        )
+        .into());
     }
     Ok(())
 }
@@ -196,11 +294,13 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
 fn handle(p: &mut Proc, v: &Value) {
     match v["event"].as_str() {
         Some("ready") => p.bar.set_message(format!("serving {} nodes", v["nodes"])),
-        Some("progress") if p.name == "writer" => {
-            p.bar.set_message(format!("generation {} | {} nodes | {} ticks", v["generation"], v["nodes"], v["ticks"]))
-        }
+        Some("progress") if p.name == "writer" => p.bar.set_message(format!(
+            "generation {} | {} nodes | {} ticks",
+            v["generation"], v["nodes"], v["ticks"]
+        )),
         Some("progress") => {
-            p.bar.set_position((v["seconds"].as_f64().unwrap_or(0.0) * 10.0) as u64);
+            p.bar
+                .set_position((v["seconds"].as_f64().unwrap_or(0.0) * 10.0) as u64);
             p.bar.set_message(format!(
                 "{} batches | generation {} | checked {} matched {}",
                 v["queries"], v["generation"], v["checked"], v["matched"]
@@ -212,7 +312,13 @@ fn handle(p: &mut Proc, v: &Value) {
     }
 }
 
-fn wait_for(rx: &mpsc::Receiver<(usize, Value)>, procs: &mut [Proc], stop: &AtomicBool, timeout: Duration, done: impl Fn(usize, &Value) -> bool) -> bool {
+fn wait_for(
+    rx: &mpsc::Receiver<(usize, Value)>,
+    procs: &mut [Proc],
+    stop: &AtomicBool,
+    timeout: Duration,
+    done: impl Fn(usize, &Value) -> bool,
+) -> bool {
     let until = Instant::now() + timeout;
     while Instant::now() < until && !stop.load(Ordering::SeqCst) {
         if let Ok((id, v)) = rx.recv_timeout(Duration::from_millis(100)) {
@@ -246,7 +352,9 @@ fn print_summary(procs: &[Proc], interrupted: bool) {
     if interrupted {
         println!("interrupted: every process stopped cleanly");
     }
-    println!("| reader | batches | query p50 µs | query p99 µs | publish→visible p50 µs | p99 µs | staleness mean / max (generations) | checked | matched |");
+    println!(
+        "| reader | batches | query p50 µs | query p99 µs | publish→visible p50 µs | p99 µs | staleness mean / max (generations) | checked | matched |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|");
     for p in &procs[1..] {
         let Some(s) = &p.summary else {
@@ -255,19 +363,38 @@ fn print_summary(procs: &[Proc], interrupted: bool) {
         };
         println!(
             "| {} | {} | {:.1} | {:.1} | {:.0} | {:.0} | {:.2} / {} | {} | {} |",
-            p.name, s["batches"], num(s, "query_p50_us"), num(s, "query_p99_us"), num(s, "visible_p50_us"),
-            num(s, "visible_p99_us"), num(s, "staleness_mean"), s["staleness_max"], s["checked"], s["matched"]
+            p.name,
+            s["batches"],
+            num(s, "query_p50_us"),
+            num(s, "query_p99_us"),
+            num(s, "visible_p50_us"),
+            num(s, "visible_p99_us"),
+            num(s, "staleness_mean"),
+            s["staleness_max"],
+            s["checked"],
+            s["matched"]
         );
     }
     if let Some(w) = &procs[0].summary {
         println!(
             "\nwriter: {:.1} updates/s (update {:.0} µs, publish {:.0} µs per tick), {} nodes at the end, generation {}, {:.1} MB published, {:.0} MB resident",
-            num(w, "updates_per_s"), num(w, "update_us"), num(w, "publish_us"), w["nodes"], w["generation"],
-            num(w, "bytes_published") / 1e6, num(w, "rss_mb")
+            num(w, "updates_per_s"),
+            num(w, "update_us"),
+            num(w, "publish_us"),
+            w["nodes"],
+            w["generation"],
+            num(w, "bytes_published") / 1e6,
+            num(w, "rss_mb")
         );
     }
-    let checked: u64 = procs.iter().filter_map(|p| p.summary.as_ref()?["checked"].as_u64()).sum();
-    let matched: u64 = procs.iter().filter_map(|p| p.summary.as_ref()?["matched"].as_u64()).sum();
+    let checked: u64 = procs
+        .iter()
+        .filter_map(|p| p.summary.as_ref()?["checked"].as_u64())
+        .sum();
+    let matched: u64 = procs
+        .iter()
+        .filter_map(|p| p.summary.as_ref()?["matched"].as_u64())
+        .sum();
     println!("brute-force check: {matched} of {checked} sampled answers matched");
 }
 
@@ -276,7 +403,9 @@ fn print_summary(procs: &[Proc], interrupted: bool) {
 fn clean_shared_memory(prefix: &str) -> Vec<String> {
     let mut left = Vec::new();
     for dir in ["/dev/shm", "/tmp/iceoryx2"] {
-        let Ok(entries) = std::fs::read_dir(dir) else { continue };
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            continue;
+        };
         for e in entries.flatten() {
             let name = e.file_name().to_string_lossy().into_owned();
             if !name.starts_with(prefix) {

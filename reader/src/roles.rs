@@ -55,7 +55,9 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     while Instant::now() < deadline && !reader.termination_requested() {
         match reader.wait_next(Duration::from_millis(20)) {
             Ok(Some(s)) => {
-                let fresh = current.as_ref().is_none_or(|c| c.generation() != s.generation());
+                let fresh = current
+                    .as_ref()
+                    .is_none_or(|c| c.generation() != s.generation());
                 if fresh {
                     let published = s.view().published_unix_ns();
                     let now = ygg_store_unix_ns();
@@ -72,7 +74,10 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
             Ok(None) => {}
             Err(e) => {
                 if !writer_gone {
-                    println!("{}", serde_json::json!({"event": "warning", "role": format!("{:?}", args.role), "message": e.to_string()}));
+                    println!(
+                        "{}",
+                        serde_json::json!({"event": "warning", "role": format!("{:?}", args.role), "message": e.to_string()})
+                    );
                 }
                 writer_gone = true;
                 std::thread::sleep(Duration::from_millis(20));
@@ -104,7 +109,11 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     let q = percentiles(&mut query_ns);
     let v = percentiles(&mut visible_ns);
-    let stale_mean = if staleness.is_empty() { 0.0 } else { staleness.iter().sum::<f64>() / staleness.len() as f64 };
+    let stale_mean = if staleness.is_empty() {
+        0.0
+    } else {
+        staleness.iter().sum::<f64>() / staleness.len() as f64
+    };
     let stale_max = staleness.iter().copied().fold(0.0, f64::max);
     println!(
         "{}",
@@ -119,13 +128,18 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn ygg_store_unix_ns() -> u64 {
-    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
 }
 
 fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, Box<dyn std::error::Error>> {
     let until = Instant::now() + Duration::from_secs_f64(wait_secs.max(0.0));
     loop {
-        match ReaderBuilder::new(scene).handle_termination_signals(true).open() {
+        match ReaderBuilder::new(scene)
+            .handle_termination_signals(true)
+            .open()
+        {
             Ok(s) => return Ok(SceneReader::with_subscriber(s)),
             Err(ygg_reader::ReaderOpenError::NoWriter { .. }) if Instant::now() < until => {
                 std::thread::sleep(Duration::from_millis(50));
@@ -148,9 +162,19 @@ fn percentiles(v: &mut [f64]) -> (f64, f64) {
 #[derive(Clone, Debug)]
 enum Query {
     Room(Point),
-    Nearest { mesh_layer: ygg_store::LayerId, point: Point },
-    Within { mesh_layer: ygg_store::LayerId, point: Point, radius: f32 },
-    Visible { mesh_layer: ygg_store::LayerId, cone: ConeView },
+    Nearest {
+        mesh_layer: ygg_store::LayerId,
+        point: Point,
+    },
+    Within {
+        mesh_layer: ygg_store::LayerId,
+        point: Point,
+        radius: f32,
+    },
+    Visible {
+        mesh_layer: ygg_store::LayerId,
+        cone: ConeView,
+    },
     Label(&'static str),
 }
 
@@ -161,7 +185,11 @@ fn newest_pose(view: &ArchivedScene<'_>) -> Option<(Point, Point)> {
     ids.sort_unstable();
     let p = |i: NodeId| view.node(i).and_then(|n| view.points(n).first().copied());
     let last = p(*ids.last()?)?;
-    let prev = ids.len().checked_sub(2).and_then(|i| p(ids[i])).unwrap_or([last[0] - 1.0, last[1], last[2]]);
+    let prev = ids.len().checked_sub(2).and_then(|i| p(ids[i])).unwrap_or([
+        last[0] - 1.0,
+        last[1],
+        last[2],
+    ]);
     Some((last, prev))
 }
 
@@ -170,7 +198,10 @@ fn room_of(view: &ArchivedScene<'_>, p: &Point) -> Option<NodeId> {
     let rooms = view.layer_by_name("ROOMS")?;
     let mut found: Vec<NodeId> = view
         .layer_nodes(rooms)
-        .filter(|&n| view.aabb(n).is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a])))
+        .filter(|&n| {
+            view.aabb(n)
+                .is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a]))
+        })
         .map(|n| view.node_id(n))
         .collect();
     found.sort_unstable();
@@ -185,7 +216,11 @@ fn room_scope(view: &ArchivedScene<'_>, room: NodeId) -> Option<(ygg_store::Laye
 }
 
 fn owners(view: &ArchivedScene<'_>, ids: impl IntoIterator<Item = NodeId>) -> Vec<u64> {
-    let mut out: Vec<u64> = ids.into_iter().filter_map(|m| query::parent(view, m)).map(|p| p.0).collect();
+    let mut out: Vec<u64> = ids
+        .into_iter()
+        .filter_map(|m| query::parent(view, m))
+        .map(|p| p.0)
+        .collect();
     out.sort_unstable();
     out.dedup();
     out
@@ -197,25 +232,59 @@ fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u
     match role {
         Role::Labels => {
             let label = LABELS[batch as usize % LABELS.len()];
-            let ids = query::nodes_with_label(view, Scope::Graph, label).into_iter().map(|n| n.0).collect();
+            let ids = query::nodes_with_label(view, Scope::Graph, label)
+                .into_iter()
+                .map(|n| n.0)
+                .collect();
             out.push((Query::Label(label), ids));
         }
         Role::Planner | Role::Visibility => {
-            let Some((pose, prev)) = newest_pose(view) else { return out };
+            let Some((pose, prev)) = newest_pose(view) else {
+                return out;
+            };
             let room = room_of(view, &pose);
             out.push((Query::Room(pose), room.map(|r| r.0).into_iter().collect()));
-            let Some((mesh_layer, claimed)) = room.and_then(|r| room_scope(view, r)) else { return out };
+            let Some((mesh_layer, claimed)) = room.and_then(|r| room_scope(view, r)) else {
+                return out;
+            };
             if role == Role::Planner {
-                let nearest = query::nearest_nodes(view, Scope::Layer(mesh_layer), pose, 1).unwrap_or_default();
-                out.push((Query::Nearest { mesh_layer, point: pose }, owners(view, nearest.into_iter().map(|n| n.0))));
-                let within = query::nodes_within_radius(view, Scope::Layer(mesh_layer), pose, 1.5).unwrap_or_default();
-                out.push((Query::Within { mesh_layer, point: pose, radius: 1.5 }, owners(view, within)));
+                let nearest = query::nearest_nodes(view, Scope::Layer(mesh_layer), pose, 1)
+                    .unwrap_or_default();
+                out.push((
+                    Query::Nearest {
+                        mesh_layer,
+                        point: pose,
+                    },
+                    owners(view, nearest.into_iter().map(|n| n.0)),
+                ));
+                let within = query::nodes_within_radius(view, Scope::Layer(mesh_layer), pose, 1.5)
+                    .unwrap_or_default();
+                out.push((
+                    Query::Within {
+                        mesh_layer,
+                        point: pose,
+                        radius: 1.5,
+                    },
+                    owners(view, within),
+                ));
             } else {
                 let d = [pose[0] - prev[0], pose[1] - prev[1], 0.0];
-                let dir = if d[0] == 0.0 && d[1] == 0.0 { [1.0, 0.0, 0.0] } else { d };
-                let cone = ConeView { eye: pose, dir, half_angle: 45f32.to_radians(), range: 5.0 };
+                let dir = if d[0] == 0.0 && d[1] == 0.0 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    d
+                };
+                let cone = ConeView {
+                    eye: pose,
+                    dir,
+                    half_angle: 45f32.to_radians(),
+                    range: 5.0,
+                };
                 let seen = query::visible(view, claimed, &cone).unwrap_or_default();
-                let seen = seen.into_iter().filter(|&n| view.node(n).is_some_and(|x| view.node_layer(x) == mesh_layer));
+                let seen = seen.into_iter().filter(|&n| {
+                    view.node(n)
+                        .is_some_and(|x| view.node_layer(x) == mesh_layer)
+                });
                 out.push((Query::Visible { mesh_layer, cone }, owners(view, seen)));
             }
         }
@@ -230,7 +299,9 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
         Query::Nearest { mesh_layer, point } => {
             let mut best: Option<(f32, u64)> = None;
             for n in view.layer_nodes(*mesh_layer) {
-                let Some(owner) = view.parent(n) else { continue };
+                let Some(owner) = view.parent(n) else {
+                    continue;
+                };
                 for p in view.points(n) {
                     let d = ygg_store::distance_squared(p, point);
                     if best.is_none_or(|(bd, bo)| d < bd || (d == bd && owner.0 < bo)) {
@@ -240,24 +311,43 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
             }
             best.map(|b| b.1).into_iter().collect()
         }
-        Query::Within { mesh_layer, point, radius } => {
+        Query::Within {
+            mesh_layer,
+            point,
+            radius,
+        } => {
             let hits = view
                 .layer_nodes(*mesh_layer)
-                .filter(|&n| view.points(n).iter().any(|p| query::within_radius(p, point, *radius)))
+                .filter(|&n| {
+                    view.points(n)
+                        .iter()
+                        .any(|p| query::within_radius(p, point, *radius))
+                })
                 .map(|n| view.node_id(n));
             owners(view, hits.collect::<Vec<_>>())
         }
-        Query::Visible { mesh_layer, cone, .. } => {
+        Query::Visible {
+            mesh_layer, cone, ..
+        } => {
             let hits = view
                 .layer_nodes(*mesh_layer)
-                .filter(|&n| view.points(n).iter().any(|p| cone.contains(p).unwrap_or(false)))
+                .filter(|&n| {
+                    view.points(n)
+                        .iter()
+                        .any(|p| cone.contains(p).unwrap_or(false))
+                })
                 .map(|n| view.node_id(n));
             owners(view, hits.collect::<Vec<_>>())
         }
         Query::Label(label) => {
             let mut ids: Vec<u64> = view
                 .layers()
-                .flat_map(|l| view.layer_nodes(l).filter(|&n| view.has_label(n, label)).map(|n| view.node_id(n).0).collect::<Vec<_>>())
+                .flat_map(|l| {
+                    view.layer_nodes(l)
+                        .filter(|&n| view.has_label(n, label))
+                        .map(|n| view.node_id(n).0)
+                        .collect::<Vec<_>>()
+                })
                 .collect();
             ids.sort_unstable();
             ids

@@ -120,7 +120,8 @@ impl SceneGraph {
     pub(crate) fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
         if self.any_box_at_or_above(id) {
             let new = self.nodes[&id].points.clone();
-            self.update_boxes(id, old, &new);
+            let (removed, added) = crate::id::changed_points(old, &new);
+            self.update_boxes(id, removed, added);
         }
     }
 
