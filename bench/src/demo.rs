@@ -127,7 +127,9 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))?;
     }
     let pid = std::process::id();
-    let prefix = format!("ygd{pid}_");
+    // Children share one iceoryx2 prefix of their own, so the demo can tell its files
+    // from anyone else's and remove them; a caller may choose it (tests do).
+    let prefix = std::env::var("YGG_IOX2_PREFIX").unwrap_or_else(|_| format!("ygd{pid}_"));
     let scene = format!("demo-{pid}");
     let logs = std::env::temp_dir().join(format!("ygg-demo-{pid}"));
     std::fs::create_dir_all(&logs)?;
