@@ -35,6 +35,10 @@ pub struct Node {
     pub(crate) features: Vec<(Sym, StoredValue)>,
     pub(crate) bbox_enabled: bool,
     pub(crate) aabb: Option<Aabb>,
+    /// With the box enabled: how many sub-tree points lie on each face of `aabb`
+    /// (min x, y, z, then max x, y, z). A face moves inward only when its count drops
+    /// to zero, so most removals and moves cost O(1) per enabled ancestor.
+    pub(crate) face_counts: [u32; 6],
 }
 
 /// One layer of the live graph.
@@ -106,7 +110,7 @@ impl SceneGraph {
         self.nodes.get(&id).ok_or(GraphEditError::UnknownNode(id))
     }
 
-    pub(crate) fn touch(&mut self, layer: LayerId) {
+    pub(crate) fn touch_layer(&mut self, layer: LayerId) {
         if let Some(l) = self.layers.get_mut(&layer) {
             l.generation += 1;
         }
@@ -305,6 +309,7 @@ impl SceneGraph {
             features: Vec::new(),
             bbox_enabled: false,
             aabb: None,
+            face_counts: [0; 6],
         });
         Ok(())
     }
@@ -363,7 +368,7 @@ impl SceneGraph {
         let node = self.nodes.get_mut(&id).expect("checked");
         let old = std::mem::replace(&mut node.points, points);
         let layer = node.layer;
-        self.touch(layer);
+        self.touch_layer(layer);
         self.geometry_changed(id, &old);
         self.index_geometry_changed(id, &old);
         Ok(())
@@ -399,7 +404,7 @@ impl SceneGraph {
                 self.post(layer, Postings::Key, k, id);
             }
         }
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -420,7 +425,7 @@ impl SceneGraph {
         node.features.remove(at);
         let layer = node.layer;
         self.unpost(layer, Postings::Key, k, id);
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -435,7 +440,7 @@ impl SceneGraph {
         node.labels.push(s);
         let layer = node.layer;
         self.post(layer, Postings::Label, s, id);
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -456,7 +461,7 @@ impl SceneGraph {
         node.labels.remove(at);
         let layer = node.layer;
         self.unpost(layer, Postings::Label, s, id);
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -534,7 +539,7 @@ impl SceneGraph {
             .binary_search_by_key(&source, |e| e.0)
             .unwrap_or_else(|e| e);
         t.in_edges.insert(at, (source, d));
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -561,7 +566,7 @@ impl SceneGraph {
             .binary_search_by_key(&source, |e| e.0)
             .expect("mirrored edge");
         t.in_edges.remove(at);
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -591,11 +596,9 @@ impl SceneGraph {
         let at = p.children.binary_search(&child).unwrap_or_else(|e| e);
         p.children.insert(at, child);
         self.nodes.get_mut(&child).expect("checked").parent = Some(parent);
-        self.touch(pl);
-        self.touch(cl);
-        if let Some(added) = self.subtree_box(child) {
-            self.grow_ancestor_boxes(parent, &added);
-        }
+        self.touch_layer(pl);
+        self.touch_layer(cl);
+        self.subtree_joined(parent, child);
         self.index_nested(parent, child);
         Ok(())
     }
@@ -610,9 +613,9 @@ impl SceneGraph {
         let at = p.children.binary_search(&child).expect("mirrored nesting");
         p.children.remove(at);
         let pl = p.layer;
-        self.touch(pl);
-        self.touch(cl);
-        self.recompute_ancestor_boxes(parent);
+        self.touch_layer(pl);
+        self.touch_layer(cl);
+        self.subtree_left(parent, child);
         self.index_unnested(parent, child);
         Ok(())
     }
@@ -626,12 +629,8 @@ impl SceneGraph {
         if node.bbox_enabled {
             return Ok(());
         }
-        let layer = node.layer;
-        let aabb = self.subtree_box(id);
-        let node = self.nodes.get_mut(&id).expect("checked");
-        node.bbox_enabled = true;
-        node.aabb = aabb;
-        self.touch(layer);
+        self.nodes.get_mut(&id).expect("checked").bbox_enabled = true;
+        self.recompute_box(id);
         Ok(())
     }
 
@@ -645,89 +644,8 @@ impl SceneGraph {
         node.bbox_enabled = false;
         node.aabb = None;
         let layer = node.layer;
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
-    }
-
-    /// The exact AABB of every point in `id`'s sub-tree, using enabled boxes below as
-    /// shortcuts.
-    pub(crate) fn subtree_box(&self, id: NodeId) -> Option<Aabb> {
-        let node = &self.nodes[&id];
-        if node.bbox_enabled {
-            return node.aabb;
-        }
-        self.scan_subtree_box(node)
-    }
-
-    fn scan_subtree_box(&self, node: &Node) -> Option<Aabb> {
-        let mut acc = Aabb::from_points(&node.points);
-        for c in &node.children {
-            if let Some(b) = self.subtree_box(*c) {
-                acc = Some(acc.map_or(b, |a| a.union(&b)));
-            }
-        }
-        acc
-    }
-
-    /// Keeps boxes exact after `id`'s points changed from `old` to its current points.
-    fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
-        let mut cur = Some(id);
-        while let Some(n) = cur {
-            let node = &self.nodes[&n];
-            cur = node.parent;
-            if !node.bbox_enabled {
-                continue;
-            }
-            let on_boundary = node
-                .aabb
-                .is_some_and(|b| old.iter().any(|p| on_box_boundary(&b, p)));
-            let aabb = if on_boundary {
-                self.scan_subtree_box(node)
-            } else {
-                let mut b = node.aabb;
-                for p in &self.nodes[&id].points {
-                    b = Some(b.map_or(Aabb::from_point(*p), |mut b| {
-                        b.grow(p);
-                        b
-                    }));
-                }
-                b
-            };
-            self.set_box(n, aabb);
-        }
-    }
-
-    fn set_box(&mut self, n: NodeId, aabb: Option<Aabb>) {
-        let node = self.nodes.get_mut(&n).expect("exists");
-        if node.aabb != aabb {
-            node.aabb = aabb;
-            let layer = node.layer;
-            self.touch(layer);
-        }
-    }
-
-    fn grow_ancestor_boxes(&mut self, from: NodeId, added: &Aabb) {
-        let mut cur = Some(from);
-        while let Some(n) = cur {
-            let node = &self.nodes[&n];
-            cur = node.parent;
-            if node.bbox_enabled {
-                let b = node.aabb.map_or(*added, |b| b.union(added));
-                self.set_box(n, Some(b));
-            }
-        }
-    }
-
-    fn recompute_ancestor_boxes(&mut self, from: NodeId) {
-        let mut cur = Some(from);
-        while let Some(n) = cur {
-            let node = &self.nodes[&n];
-            cur = node.parent;
-            if node.bbox_enabled {
-                let b = self.scan_subtree_box(node);
-                self.set_box(n, b);
-            }
-        }
     }
 
     // ---- invariants ---------------------------------------------------------------
@@ -853,16 +771,31 @@ impl SceneGraph {
                 }
             }
             for &(s, _) in &node.in_edges {
-                if !self
+                let mirrored = self
                     .nodes
                     .get(&s)
-                    .is_some_and(|sn| sn.out_edges.binary_search_by_key(&id, |e| e.0).is_ok())
-                {
+                    .is_some_and(|sn| sn.out_edges.binary_search_by_key(&id, |e| e.0).is_ok());
+                if !mirrored {
                     return Err(format!("in-edge {s}->{id} not mirrored"));
                 }
             }
             if node.bbox_enabled {
                 let exact = self.brute_subtree_box(id);
+                if let Some(b) = exact {
+                    let mut counts = [0u32; 6];
+                    for p in self.brute_subtree_points(id) {
+                        for a in 0..3 {
+                            counts[a] += u32::from(p[a] == b.min[a]);
+                            counts[3 + a] += u32::from(p[a] == b.max[a]);
+                        }
+                    }
+                    if counts != node.face_counts {
+                        return Err(format!(
+                            "node {id} face counts {:?} != {counts:?}",
+                            node.face_counts
+                        ));
+                    }
+                }
                 if node.aabb != exact {
                     return Err(format!(
                         "node {id} box {:?} != exact {:?}",
@@ -883,6 +816,15 @@ impl SceneGraph {
             .any(|&c| self.layer_reaches(c, l))
     }
 
+    fn brute_subtree_points(&self, id: NodeId) -> Vec<Point> {
+        let node = &self.nodes[&id];
+        let mut out = node.points.clone();
+        for c in &node.children {
+            out.extend(self.brute_subtree_points(*c));
+        }
+        out
+    }
+
     fn brute_subtree_box(&self, id: NodeId) -> Option<Aabb> {
         let node = &self.nodes[&id];
         let mut acc = Aabb::from_points(&node.points);
@@ -897,8 +839,4 @@ impl SceneGraph {
 
 fn node_parent(g: &SceneGraph, id: NodeId) -> Option<NodeId> {
     g.nodes[&id].parent
-}
-
-fn on_box_boundary(b: &Aabb, p: &Point) -> bool {
-    (0..3).any(|a| p[a] <= b.min[a] || p[a] >= b.max[a])
 }

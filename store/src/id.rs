@@ -73,9 +73,9 @@ impl Aabb {
 
     /// Grows the box to hold `p`.
     pub fn grow(&mut self, p: &Point) {
-        for a in 0..3 {
-            self.min[a] = self.min[a].min(p[a]);
-            self.max[a] = self.max[a].max(p[a]);
+        for ((lo, hi), c) in self.min.iter_mut().zip(&mut self.max).zip(p) {
+            *lo = lo.min(*c);
+            *hi = hi.max(*c);
         }
     }
 
@@ -95,14 +95,8 @@ impl Aabb {
     /// Squared distance from `p` to the closest point of the box (0 inside).
     pub fn distance_squared_to(&self, p: &Point) -> f32 {
         let mut d = 0.0;
-        for a in 0..3 {
-            let v = if p[a] < self.min[a] {
-                self.min[a] - p[a]
-            } else if p[a] > self.max[a] {
-                p[a] - self.max[a]
-            } else {
-                0.0
-            };
+        for ((lo, hi), c) in self.min.iter().zip(&self.max).zip(p) {
+            let v = (lo - c).max(c - hi).max(0.0);
             d += v * v;
         }
         d

@@ -11,11 +11,14 @@
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
+mod bbox;
+pub mod dsg;
 mod error;
 mod feature;
 mod graph;
 mod id;
 pub mod index;
+pub mod layout;
 mod live_view;
 pub mod query;
 pub mod snapshot;

@@ -377,6 +377,79 @@ where
         .expect("serializing plain columns into memory cannot fail")
 }
 
+/// A writer that only counts bytes: the first pass of archiving into a buffer of exact
+/// size (a loaned shared-memory sample), so the archive is written once, in place.
+#[derive(Default)]
+struct ByteCounter {
+    pos: usize,
+}
+
+impl rkyv::ser::Positional for ByteCounter {
+    fn pos(&self) -> usize {
+        self.pos
+    }
+}
+
+impl<E> rkyv::ser::Writer<E> for ByteCounter {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), E> {
+        self.pos += bytes.len();
+        Ok(())
+    }
+}
+
+type Serializer<'a, W> =
+    rkyv::api::high::HighSerializer<W, rkyv::ser::allocator::ArenaHandle<'a>, rkyv::rancor::Error>;
+
+fn archived_len_of<T>(value: &T) -> usize
+where
+    T: for<'a> Serialize<Serializer<'a, ByteCounter>>,
+{
+    rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(value, ByteCounter::default())
+        .expect("counting bytes cannot fail")
+        .pos
+}
+
+fn archive_into_slice<T>(value: &T, out: &mut [u8]) -> Result<usize, SnapshotError>
+where
+    T: for<'a, 'b> Serialize<Serializer<'a, rkyv::ser::writer::Buffer<'b>>>,
+{
+    use rkyv::ser::Positional;
+    let len = out.len();
+    let written = rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(
+        value,
+        rkyv::ser::writer::Buffer::from(out),
+    )
+    .map_err(|e| SnapshotError::Layout {
+        what: "archive".into(),
+        reason: format!("{len}-byte buffer: {e}"),
+    })?
+    .pos();
+    Ok(written)
+}
+
+macro_rules! in_place_archiving {
+    ($t:ty) => {
+        impl $t {
+            /// Exact size of this value's archive, for loaning a buffer of that size.
+            pub fn archived_len(&self) -> usize {
+                archived_len_of(self)
+            }
+
+            /// Archives straight into `out` (which must be 16-byte aligned and at least
+            /// [`Self::archived_len`] bytes) and returns the bytes written.
+            ///
+            /// # Errors
+            /// [`SnapshotError::Layout`] when `out` is too small.
+            pub fn archive_into(&self, out: &mut [u8]) -> Result<usize, SnapshotError> {
+                archive_into_slice(self, out)
+            }
+        }
+    };
+}
+
+in_place_archiving!(LayerSegment);
+in_place_archiving!(Manifest);
+
 // ---- the .ygg file ------------------------------------------------------------------
 
 /// First eight bytes of every `.ygg` file.
@@ -451,7 +524,7 @@ fn unpack_file(bytes: &[u8], what: &str) -> Result<Vec<std::ops::Range<usize>>, 
                 "segment {i} ({off}+{len}) lies outside the file"
             )));
         };
-        if off as usize % SEGMENT_ALIGN != 0 {
+        if !(off as usize).is_multiple_of(SEGMENT_ALIGN) {
             return Err(layout(format!(
                 "segment {i} at offset {off} is not {SEGMENT_ALIGN}-byte aligned"
             )));
@@ -638,7 +711,7 @@ pub fn validate_layer<'a>(
 }
 
 fn check_alignment(bytes: &[u8], what: &str) -> Result<(), SnapshotError> {
-    if bytes.as_ptr() as usize % 16 != 0 {
+    if !(bytes.as_ptr() as usize).is_multiple_of(16) {
         return Err(SnapshotError::Layout {
             what: what.to_owned(),
             reason: "bytes are not 16-byte aligned".into(),
@@ -803,7 +876,53 @@ fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), St
     Ok(())
 }
 
+/// Checks the manifest's layer DAG: unique names, mirrored edges, no cycle. Edges are
+/// known to name listed layers.
+fn check_dag(manifest: &ArchivedManifest) -> Result<(), String> {
+    let mut names: Vec<&str> = manifest.layers.iter().map(|m| m.name.as_str()).collect();
+    names.sort_unstable();
+    if names.windows(2).any(|w| w[0] == w[1]) {
+        return Err("two layers share a name".into());
+    }
+    let position = |id: u32| manifest.layers.iter().position(|m| m.id == id);
+    for m in manifest.layers.iter() {
+        for &c in u32s(&m.children) {
+            let child = &manifest.layers[position(c).ok_or("unknown DAG child")?];
+            if !u32s(&child.parents).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {} -> {c} is not mirrored", m.id));
+            }
+        }
+        for &p in u32s(&m.parents) {
+            let parent = &manifest.layers[position(p).ok_or("unknown DAG parent")?];
+            if !u32s(&parent.children).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {p} -> {} is not mirrored", m.id));
+            }
+        }
+    }
+    // Kahn's algorithm: every layer must be removable, or the DAG has a cycle.
+    let mut indegree: Vec<usize> = manifest.layers.iter().map(|m| m.parents.len()).collect();
+    let mut ready: Vec<usize> = (0..indegree.len()).filter(|&i| indegree[i] == 0).collect();
+    let mut removed = 0;
+    while let Some(i) = ready.pop() {
+        removed += 1;
+        for &c in u32s(&manifest.layers[i].children) {
+            let ci = position(c).ok_or("unknown DAG child")?;
+            indegree[ci] = indegree[ci].saturating_sub(1);
+            if indegree[ci] == 0 {
+                ready.push(ci);
+            }
+        }
+    }
+    if removed != manifest.layers.len() {
+        return Err("the layer DAG has a cycle".into());
+    }
+    Ok(())
+}
+
 // ---- the archived view ----------------------------------------------------------------
+
+/// An archived inverted index: term -> `[start, end)` range of its posting column.
+type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>;
 
 /// A consistent cut of archived layers: the [`SceneView`] over validated bytes from a
 /// `.ygg` file or from shared memory.
@@ -861,6 +980,7 @@ impl<'a> ArchivedScene<'a> {
                 return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
             }
         }
+        check_dag(manifest)?;
         for ls in manifest
             .label_layers
             .values()
@@ -907,10 +1027,7 @@ impl<'a> ArchivedScene<'a> {
         term: &str,
         pick: fn(
             &'a ArchivedLayerSegment,
-        ) -> (
-            &'a ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>,
-            &'a ArchivedVec<rkyv::rend::u32_le>,
-        ),
+        ) -> (&'a ArchivedTermIndex, &'a ArchivedVec<rkyv::rend::u32_le>),
     ) -> impl Iterator<Item = ArchivedNodeRef> + 'a {
         let found = self.segment(layer).and_then(|(li, seg)| {
             let (index, postings) = pick(seg);
@@ -995,13 +1112,14 @@ impl SceneView for ArchivedScene<'_> {
 
     fn node(&self, id: NodeId) -> Option<ArchivedNodeRef> {
         for (li, m) in self.manifest.layers.iter().enumerate() {
-            if m.min_id.to_native() <= id.0 && id.0 <= m.max_id.to_native() {
-                if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
-                    return Some(ArchivedNodeRef {
-                        layer: li as u32,
-                        row: row as u32,
-                    });
-                }
+            if !(m.min_id.to_native()..=m.max_id.to_native()).contains(&id.0) {
+                continue;
+            }
+            if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
+                return Some(ArchivedNodeRef {
+                    layer: li as u32,
+                    row: row as u32,
+                });
             }
         }
         None
@@ -1105,19 +1223,15 @@ impl SceneView for ArchivedScene<'_> {
         Self::graph_layers(&self.manifest.key_layers, key)
     }
 
-    fn nodes_with_label<'b>(
-        &'b self,
+    fn nodes_with_label(
+        &self,
         layer: LayerId,
         label: &str,
     ) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, label, |s| (&s.label_index, &s.label_postings))
     }
 
-    fn nodes_with_key<'b>(
-        &'b self,
-        layer: LayerId,
-        key: &str,
-    ) -> impl Iterator<Item = ArchivedNodeRef> {
+    fn nodes_with_key(&self, layer: LayerId, key: &str) -> impl Iterator<Item = ArchivedNodeRef> {
         self.postings(layer, key, |s| (&s.key_index, &s.key_postings))
     }
 
@@ -1144,5 +1258,35 @@ impl SceneView for ArchivedScene<'_> {
         let ni = &seg.node_indexes[at];
         // `check_layer` bounded the tree's items by the index's id table.
         Some(ArchivedIndex::new(&ni.tree, u64s(&ni.ids)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn archiving_in_place_gives_the_same_bytes_as_archiving_to_a_vector() {
+        let mut g = SceneGraph::new();
+        let l = g.add_layer("objects").unwrap();
+        for i in 0..50 {
+            g.add_node(NodeId(i), l).unwrap();
+            g.set_geometry(NodeId(i), vec![[i as f32, 1.0, 2.0]])
+                .unwrap();
+            g.add_label(NodeId(i), if i % 2 == 0 { "even" } else { "odd" })
+                .unwrap();
+        }
+        let seg = g.layer_segment(l);
+        let expected = archive(&seg);
+        let len = seg.archived_len();
+        assert_eq!(len, expected.len());
+        let mut out = SegmentBytes::with_capacity(len);
+        out.resize(len, 0);
+        assert_eq!(seg.archive_into(&mut out).unwrap(), len);
+        assert_eq!(out.as_slice(), expected.as_slice());
+        validate_layer(&out, "in place").unwrap();
+        let mut short = SegmentBytes::with_capacity(len);
+        short.resize(len - 1, 0);
+        assert!(seg.archive_into(&mut short).is_err());
     }
 }

@@ -116,7 +116,7 @@ impl SceneGraph {
         self.indexes
             .layers
             .insert(layer, LiveKdTree::from_entries(entries));
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -129,7 +129,7 @@ impl SceneGraph {
             return Err(GraphEditError::UnknownLayer(layer));
         }
         if self.indexes.layers.remove(&layer).is_some() {
-            self.touch(layer);
+            self.touch_layer(layer);
         }
         Ok(())
     }
@@ -152,7 +152,7 @@ impl SceneGraph {
             return Ok(());
         }
         let mut entries = Vec::new();
-        for (id, points) in self.subtree_points(node) {
+        for (id, points) in self.indexed_members(node) {
             let h = self.indexes.handle(id);
             entries.extend(
                 points
@@ -163,7 +163,7 @@ impl SceneGraph {
         self.indexes
             .nodes
             .insert(node, LiveKdTree::from_entries(entries));
-        self.touch(layer);
+        self.touch_layer(layer);
         Ok(())
     }
 
@@ -178,13 +178,13 @@ impl SceneGraph {
             .ok_or(GraphEditError::UnknownNode(node))?
             .layer;
         if self.indexes.nodes.remove(&node).is_some() {
-            self.touch(layer);
+            self.touch_layer(layer);
         }
         Ok(())
     }
 
     /// The nodes with points in `root`'s sub-tree, with their points.
-    fn subtree_points(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
+    fn indexed_members(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
         let mut out = Vec::new();
         let mut stack = vec![root];
         while let Some(id) = stack.pop() {
@@ -238,7 +238,7 @@ impl SceneGraph {
             }
         }
         for l in touched {
-            self.touch(l);
+            self.touch_layer(l);
         }
     }
 
@@ -258,7 +258,7 @@ impl SceneGraph {
             return;
         }
         let moved: Vec<(u32, Vec<Point>)> = self
-            .subtree_points(child)
+            .indexed_members(child)
             .into_iter()
             .map(|(id, points)| (self.indexes.handle(id), points))
             .collect();
@@ -272,7 +272,7 @@ impl SceneGraph {
                 }
             }
             let rl = self.nodes[&r].layer;
-            self.touch(rl);
+            self.touch_layer(rl);
         }
     }
 
@@ -329,7 +329,7 @@ impl SceneGraph {
         roots
             .into_iter()
             .map(|root| {
-                let mut members = self.subtree_points(root);
+                let mut members = self.indexed_members(root);
                 members.sort_unstable_by_key(|m| m.0);
                 let mut entries = Vec::new();
                 for (i, (_, points)) in members.iter().enumerate() {
@@ -390,7 +390,7 @@ impl SceneGraph {
             if !self.nodes.contains_key(&root) {
                 return Err(format!("index of missing node {root}"));
             }
-            if actual(t)? != expect(self.subtree_points(root)) {
+            if actual(t)? != expect(self.indexed_members(root)) {
                 return Err(format!("node index of {root} differs from its sub-tree"));
             }
         }

@@ -24,7 +24,7 @@ pub use pattern::{
 #[doc(inline)]
 pub use spatial::{
     SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes, nodes_within_radius,
-    within_index,
+    within_index, within_radius,
 };
 pub(crate) use traverse::visit_subtree;
 #[doc(inline)]

@@ -142,8 +142,8 @@ pub fn subgraph<V: SceneView>(view: &V, nodes: &[NodeId]) -> SceneGraph {
         g.add_node(id, view.node_layer(n))
             .expect("fresh id in an existing layer");
         if !view.points(n).is_empty() {
-            g.set_geometry(id, view.points(n).to_vec())
-                .expect("points of a valid view are finite");
+            // A damaged snapshot could carry non-finite points; such geometry is dropped.
+            let _ = g.set_geometry(id, view.points(n).to_vec());
         }
         for label in view.labels(n) {
             g.add_label(id, label).expect("node exists");

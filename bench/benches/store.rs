@@ -1,0 +1,131 @@
+//! Store benchmarks (issue: data model and archived snapshot): update latency with and
+//! without bounding boxes, label query latency (frequent, rare, absent) on the live
+//! graph and the archive, and validated open of a ~40 MB snapshot.
+#![expect(clippy::unwrap_used, reason = "acceptable in benchmarks")]
+
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use std::hint::black_box;
+use ygg_store::query::nodes_with_label;
+use ygg_store::{NodeId, SceneGraph, Scope, SnapshotFile};
+
+/// Rooms (with boxes when `boxes`) nesting `n` objects of one point each; labels
+/// "common" on every 2nd object, "rare" on one.
+fn scene(n: u64, boxes: bool) -> SceneGraph {
+    let mut g = SceneGraph::new();
+    let rooms = g.add_layer("rooms").unwrap();
+    let objects = g.add_layer("objects").unwrap();
+    g.add_layer_edge(rooms, objects).unwrap();
+    for r in 0..9 {
+        g.add_node(NodeId(r), rooms).unwrap();
+        if boxes {
+            g.enable_bounding_box(NodeId(r)).unwrap();
+        }
+    }
+    for i in 0..n {
+        let id = NodeId(100 + i);
+        g.add_node(id, objects).unwrap();
+        g.set_geometry(id, vec![point(i)]).unwrap();
+        g.nest(NodeId(i % 9), id).unwrap();
+        if i % 2 == 0 {
+            g.add_label(id, "common").unwrap();
+        }
+    }
+    g.add_label(NodeId(100 + n / 2), "rare").unwrap();
+    g
+}
+
+fn point(i: u64) -> [f32; 3] {
+    let h = i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    [
+        (h % 4000) as f32 / 100.0,
+        (h >> 20) as f32 % 25.0,
+        (h >> 40) as f32 % 3.0,
+    ]
+}
+
+fn updates(c: &mut Criterion) {
+    let mut group = c.benchmark_group("update");
+    for boxes in [false, true] {
+        let tag = if boxes { "with_boxes" } else { "no_boxes" };
+        let mut g = scene(100_000, boxes);
+        let objects = g.layer_id("objects").unwrap();
+        let mut next = 10_000_000u64;
+        group.bench_function(format!("add_node/{tag}"), |b| {
+            b.iter(|| {
+                next += 1;
+                g.add_node(black_box(NodeId(next)), objects).unwrap();
+            })
+        });
+        let mut i = 0u64;
+        group.bench_function(format!("move_node/{tag}"), |b| {
+            b.iter(|| {
+                i += 1;
+                let id = NodeId(100 + i % 100_000);
+                g.set_geometry(id, vec![point(i + 7)]).unwrap();
+            })
+        });
+        let mut k = 0u64;
+        group.bench_function(format!("add_edge/{tag}"), |b| {
+            b.iter(|| {
+                k += 1;
+                let (s, t) = (
+                    NodeId(100 + k % 100_000),
+                    NodeId(100 + (k * 7919 + 1) % 100_000),
+                );
+                let _ = g.add_edge(s, t, "near");
+            })
+        });
+    }
+    group.finish();
+}
+
+fn labels(c: &mut Criterion) {
+    let g = scene(100_000, false);
+    let snapshot = g.to_snapshot();
+    let view = snapshot.view();
+    let mut group = c.benchmark_group("label_query");
+    for label in ["common", "rare", "absent"] {
+        group.bench_function(format!("live/{label}"), |b| {
+            b.iter(|| nodes_with_label(&g, Scope::Graph, black_box(label)))
+        });
+        group.bench_function(format!("archived/{label}"), |b| {
+            b.iter(|| nodes_with_label(&view, Scope::Graph, black_box(label)))
+        });
+    }
+    group.finish();
+}
+
+fn open(c: &mut Criterion) {
+    // ~40 MB: 200k nodes of 16 points each (the shape of an object mesh layer).
+    let mut g = SceneGraph::new();
+    let mesh = g.add_layer("mesh").unwrap();
+    for i in 0..200_000u64 {
+        g.add_node(NodeId(i), mesh).unwrap();
+        g.set_geometry(NodeId(i), (0..16).map(|k| point(i * 16 + k)).collect())
+            .unwrap();
+    }
+    let dir = tempfile_dir();
+    let path = dir.join("open.ygg");
+    g.save(&path).unwrap();
+    let bytes = std::fs::metadata(&path).unwrap().len();
+    let mut group = c.benchmark_group("open_validate");
+    group.throughput(Throughput::Bytes(bytes));
+    group.bench_function(format!("{:.1}MB", bytes as f64 / 1e6), |b| {
+        b.iter_batched(
+            || (),
+            |_| SnapshotFile::open(&path).unwrap(),
+            BatchSize::SmallInput,
+        )
+    });
+    group.finish();
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("ygg-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+criterion_group!(benches, updates, labels, open);
+criterion_main!(benches);

@@ -1,0 +1,83 @@
+//! Timing: every query of the workload on every target, repeated, with per-family
+//! median and p99.
+
+use super::Answer;
+use super::workload::{Query, Workload};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Something that answers workload queries (a rung of the ladder or an anchor).
+pub trait Target {
+    /// The target's name in the report.
+    fn name(&self) -> String;
+    /// Answers one query.
+    fn answer(&self, q: &Query) -> Answer;
+}
+
+/// One timing row.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// Target or anchor name.
+    pub target: String,
+    /// Query family ("Q1a", "Q1b@0.25", ...).
+    pub query: String,
+    /// Median latency, microseconds.
+    pub median_us: f64,
+    /// 99th-percentile latency, microseconds.
+    pub p99_us: f64,
+}
+
+/// Median and p99 of samples (nanoseconds in, microseconds out).
+pub fn median_p99(samples: &mut [f64]) -> (f64, f64) {
+    if samples.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    samples.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| samples[((samples.len() - 1) as f64 * q).round() as usize] / 1e3;
+    (at(0.5), at(0.99))
+}
+
+/// Times every query `reps` times on `target`; rows per family.
+pub fn time_target(target: &dyn Target, workload: &Workload, reps: usize) -> Vec<Row> {
+    let mut by_family: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for q in &workload.queries {
+        let samples = by_family.entry(q.family()).or_default();
+        for _ in 0..reps {
+            let t = Instant::now();
+            let a = target.answer(q);
+            let ns = t.elapsed().as_nanos() as f64;
+            std::hint::black_box(a);
+            samples.push(ns);
+        }
+    }
+    let name = target.name();
+    by_family
+        .into_iter()
+        .map(|(query, mut s)| {
+            let (median_us, p99_us) = median_p99(&mut s);
+            Row { target: name.clone(), query, median_us, p99_us }
+        })
+        .collect()
+}
+
+/// Answers of every query on every target; `Err` describes the first disagreement with
+/// the first target.
+pub fn compare_answers(targets: &[&dyn Target], workload: &Workload) -> Result<Vec<Answer>, String> {
+    let Some((reference, rest)) = targets.split_first() else {
+        return Ok(Vec::new());
+    };
+    let answers: Vec<Answer> = workload.queries.iter().map(|q| reference.answer(q)).collect();
+    for t in rest {
+        for (i, (q, want)) in workload.queries.iter().zip(&answers).enumerate() {
+            let got = t.answer(q);
+            if &got != want {
+                return Err(format!(
+                    "query {i} ({q:?}): {} answers {want:?}, {} answers {got:?}",
+                    reference.name(),
+                    t.name()
+                ));
+            }
+        }
+    }
+    Ok(answers)
+}

@@ -1,0 +1,314 @@
+//! `ygg-bench ladder`: the paper's ablation ladder (dsg, vanilla, chocolate, mint,
+//! saffron) on the office workload, with answers checked identical before timing.
+
+pub mod flat_dsg;
+pub mod harness;
+pub mod kiddo_floor;
+pub mod report;
+pub mod workload;
+
+use ygg_store::Point;
+
+/// Sorted object ids answering one query.
+pub type Answer = Vec<u64>;
+
+/// The cone test of Q2, as the workload defines it: `|v - eye| <= range` and the angle
+/// between `v - eye` and the unit `dir` at most the half-angle (`cos_half` is its
+/// cosine); a point at the eye is visible.
+pub fn cone_contains(eye: &Point, dir: &Point, cos_half: f32, range: f32, v: &Point) -> bool {
+    let d = [v[0] - eye[0], v[1] - eye[1], v[2] - eye[2]];
+    let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    if len2 > range * range {
+        return false;
+    }
+    let along = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
+    len2 == 0.0 || along >= len2.sqrt() * cos_half
+}
+
+pub mod ygg;
+
+use harness::{Row, Target, compare_answers, median_p99, time_target};
+use report::{Report, StaticRow};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use workload::Workload;
+use ygg_store::dsg::{self, DsgGraph, NodeKind};
+use ygg_store::layout::{self, Layout};
+use ygg_store::{NodeId, SceneGraph, SceneView};
+
+/// Options of `ygg-bench ladder`.
+#[derive(clap::Args, Debug)]
+pub struct LadderArgs {
+    /// A Spark-DSG JSON file (.json or .json.gz) instead of the built-in office.
+    #[arg(long)]
+    pub dsg: Option<PathBuf>,
+    /// Scale of the built-in office (1 = the uHumans2 office).
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// Reference points per room.
+    #[arg(long, default_value_t = 64)]
+    pub per_room: usize,
+    /// Repetitions of every query.
+    #[arg(long, default_value_t = 5)]
+    pub reps: usize,
+    /// Fewer repetitions and reference points: under a minute.
+    #[arg(long)]
+    pub quick: bool,
+    /// Write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the markdown table and SVG plot into this folder.
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+    /// Skip the Spark-DSG Python anchor.
+    #[arg(long)]
+    pub no_spark_dsg: bool,
+}
+
+/// Runs the ladder and writes its report.
+pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let (per_room, reps) = if args.quick { (args.per_room.min(16), 1) } else { (args.per_room, args.reps.max(1)) };
+    let t = Instant::now();
+    let (dsg, input) = match &args.dsg {
+        Some(path) => (dsg::read_file(path)?, path.display().to_string()),
+        None => {
+            let p = dsg::office::OfficeParams { seed: 7, scale: args.scale };
+            (dsg::office::generate(p), format!("built-in office (seed 7, scale {})", args.scale))
+        }
+    };
+    eprintln!("input: {input} ({} nodes) in {:.1?}", dsg.nodes.len(), t.elapsed());
+    let workload = Workload::generate(&dsg, 42, per_room);
+    eprintln!("workload: {} queries, {reps} repetition(s) each", workload.queries.len());
+
+    let flat = flat_dsg::FlatDsg::new(&dsg);
+    let mut graphs: Vec<(Layout, SceneGraph)> = Vec::new();
+    for l in Layout::ALL {
+        let t = Instant::now();
+        graphs.push((l, layout::build(&dsg, l)?));
+        eprintln!("built {l} in {:.1?}", t.elapsed());
+    }
+    let room_of: rustc_hash::FxHashMap<u64, u64> = object_rooms(&dsg);
+    let floor = kiddo_floor::KiddoFloor::new(&dsg, &room_of);
+
+    let mut statics = vec![StaticRow {
+        target: "dsg".into(),
+        nodes: flat.node_count(),
+        memory_mb: flat.memory_bytes() as f64 / 1e6,
+        update_us: f64::NAN,
+    }];
+    for (l, g) in &mut graphs {
+        let (m, ls) = g.to_segments();
+        let bytes = m.len() + ls.iter().map(|x| x.len()).sum::<usize>();
+        statics.push(StaticRow {
+            target: l.name().into(),
+            nodes: g.node_count(),
+            memory_mb: bytes as f64 / 1e6,
+            update_us: update_latency(g, if args.quick { 200 } else { 2000 }),
+        });
+    }
+
+    let snapshot = graphs.iter().find(|(l, _)| *l == Layout::Mint).map(|(_, g)| g.to_snapshot()).expect("mint built");
+    let targets: Vec<Box<dyn Target + '_>> = {
+        let mut v: Vec<Box<dyn Target + '_>> = vec![Box::new(FlatTarget(&flat))];
+        for (l, g) in &graphs {
+            v.push(Box::new(ygg::YggTarget::new(l.name().into(), *l, g)));
+        }
+        v.push(Box::new(ygg::YggTarget::new("mint-archived".into(), Layout::Mint, snapshot.view())));
+        v
+    };
+    let refs: Vec<&dyn Target> = targets.iter().map(|t| t.as_ref()).collect();
+    let answers = compare_answers(&refs, &workload).map_err(|e| format!("answers differ, refusing to time: {e}"))?;
+    eprintln!("answers identical on {} targets", refs.len());
+
+    let mut rows = Vec::new();
+    for t in &refs {
+        let t0 = Instant::now();
+        rows.extend(time_target(*t, &workload, reps));
+        eprintln!("timed {} in {:.1?}", t.name(), t0.elapsed());
+    }
+    let mut anchors: Vec<Row> = time_target(&floor, &workload, reps)
+        .into_iter()
+        .filter(|r| r.query.starts_with("Q1"))
+        .collect();
+    let mut notes = Vec::new();
+    rows.extend(after_update_local(&mut graphs, &workload, &dsg, if args.quick { 20 } else { 200 }));
+
+    if !args.no_spark_dsg {
+        match spark_dsg_anchor(&dsg, args, &workload, &answers) {
+            Ok((a, n)) => {
+                anchors.extend(a);
+                notes.extend(n);
+            }
+            Err(e) => notes.push(format!("Spark-DSG anchor unavailable: {e}")),
+        }
+    }
+    let report = Report {
+        machine: report::machine(),
+        input,
+        rows,
+        statics,
+        anchors,
+        answers_identical: true,
+        notes,
+    };
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&report.to_json())?)?;
+        eprintln!("wrote {}", path.display());
+    }
+    let md = report.to_markdown();
+    if let Some(dir) = &args.out_dir {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("ladder.md"), &md)?;
+        report.plot_svg(&dir.join("ladder.svg"))?;
+        eprintln!("wrote {}/ladder.md and ladder.svg", dir.display());
+    }
+    println!("{md}");
+    Ok(())
+}
+
+/// The flat baseline as a ladder target.
+struct FlatTarget<'a>(&'a flat_dsg::FlatDsg);
+
+impl Target for FlatTarget<'_> {
+    fn name(&self) -> String {
+        "dsg".into()
+    }
+    fn answer(&self, q: &workload::Query) -> Answer {
+        self.0.answer(q)
+    }
+}
+
+/// The room of every object (its ancestor room).
+fn object_rooms(dsg: &DsgGraph) -> rustc_hash::FxHashMap<u64, u64> {
+    let index = dsg.node_index();
+    dsg.nodes
+        .iter()
+        .filter(|n| n.kind == NodeKind::Object)
+        .filter_map(|o| {
+            let mut cur = o.parent;
+            for _ in 0..8 {
+                let n = &dsg.nodes[*index.get(&cur?)?];
+                if n.kind == NodeKind::Room {
+                    return Some((o.id, n.id));
+                }
+                cur = n.parent;
+            }
+            None
+        })
+        .collect()
+}
+
+/// Median latency of moving one mesh point of a random object (the mapping stack's most
+/// frequent edit), with whatever boxes and indexes the layout keeps live.
+fn update_latency(g: &mut SceneGraph, n: usize) -> f64 {
+    let mesh_nodes: Vec<NodeId> = layout::object_mesh_layers(&*g)
+        .into_iter()
+        .flat_map(|(l, _)| g.layer_nodes(l).map(|m| g.node_id(m)).collect::<Vec<_>>())
+        .collect();
+    if mesh_nodes.is_empty() {
+        return f64::NAN;
+    }
+    let mut samples = Vec::with_capacity(n);
+    for i in 0..n {
+        let id = mesh_nodes[(i * 7919) % mesh_nodes.len()];
+        let mut points = g.node(id).map(|m| g.points(m).to_vec()).unwrap_or_default();
+        let k = i % points.len().max(1);
+        if let Some(p) = points.get_mut(k) {
+            p[0] += if i % 2 == 0 { 0.01 } else { -0.01 };
+        }
+        let t = Instant::now();
+        g.set_geometry(id, points).expect("moving a point of an existing node");
+        samples.push(t.elapsed().as_nanos() as f64);
+    }
+    median_p99(&mut samples).0
+}
+
+/// Query after an update, in process: translate an object's mesh, then answer a Q1a in
+/// its room; time from the mutation to the answer.
+fn after_update_local(graphs: &mut [(Layout, SceneGraph)], w: &Workload, dsg: &DsgGraph, n: usize) -> Vec<Row> {
+    let rooms = object_rooms(dsg);
+    let Some(room) = rooms.get(&w.update_object).copied() else { return Vec::new() };
+    let Some(q) = w.queries.iter().find(|q| matches!(q, workload::Query::Nearest { room: r, .. } if *r == room)).cloned() else {
+        return Vec::new();
+    };
+    let mut rows = Vec::new();
+    for (l, g) in graphs.iter_mut() {
+        let mesh: Vec<NodeId> = ygg_store::query::children(&*g, NodeId(w.update_object));
+        let mut samples = Vec::with_capacity(n);
+        for i in 0..n {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            let t = Instant::now();
+            for &m in &mesh {
+                let moved: Vec<[f32; 3]> = g
+                    .node(m)
+                    .map(|x| g.points(x).iter().map(|p| [0, 1, 2].map(|a| p[a] + sign * w.update_translation[a])).collect())
+                    .unwrap_or_default();
+                g.set_geometry(m, moved).expect("moving an existing mesh node");
+            }
+            let target = ygg::YggTarget::new(String::new(), *l, &*g);
+            std::hint::black_box(target.answer(&q));
+            samples.push(t.elapsed().as_nanos() as f64);
+        }
+        let (median_us, p99_us) = median_p99(&mut samples);
+        rows.push(Row { target: l.name().into(), query: "after_update_local".into(), median_us, p99_us });
+    }
+    rows
+}
+
+/// Runs the Spark-DSG Python anchor on the same input and workload.
+fn spark_dsg_anchor(
+    dsg: &DsgGraph,
+    args: &LadderArgs,
+    w: &Workload,
+    answers: &[Answer],
+) -> Result<(Vec<Row>, Vec<String>), Box<dyn std::error::Error>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let script = root.join("bench/spark_dsg/run.sh");
+    let dir = std::env::temp_dir().join(format!("ygg-ladder-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let input = match &args.dsg {
+        Some(p) => p.clone(),
+        None => {
+            let p = dir.join("office.json");
+            dsg::write_json(dsg, &p)?;
+            p
+        }
+    };
+    let wpath = dir.join("workload.json");
+    std::fs::write(&wpath, serde_json::to_string(&w.to_json())?)?;
+    let out = dir.join("rows.json");
+    let mut cmd = std::process::Command::new("bash");
+    cmd.arg(&script).arg("--dsg").arg(&input).arg("--workload").arg(&wpath).arg("--out").arg(&out).current_dir(&root);
+    if args.quick {
+        cmd.arg("--quick");
+    }
+    eprintln!("running the Spark-DSG anchor (first run installs spark-dsg into a venv)...");
+    let status = cmd.status()?;
+    if !status.success() {
+        return Err(format!("{} exited with {status}", script.display()).into());
+    }
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out)?)?;
+    let mut rows = Vec::new();
+    for a in v["anchors"].as_array().into_iter().flatten() {
+        rows.push(Row {
+            target: a["name"].as_str().unwrap_or("spark-dsg").to_owned(),
+            query: a["query"].as_str().unwrap_or("").to_owned(),
+            median_us: a["median_us"].as_f64().unwrap_or(f64::NAN),
+            p99_us: a["p99_us"].as_f64().unwrap_or(f64::NAN),
+        });
+    }
+    let mut notes = Vec::new();
+    let mut differ = 0;
+    if let Some(map) = v["answers"].as_object() {
+        for (id, ids) in map {
+            let Ok(i) = id.parse::<usize>() else { continue };
+            let theirs: Vec<u64> = ids.as_array().into_iter().flatten().filter_map(|x| x.as_u64()).collect();
+            if answers.get(i).is_some_and(|ours| *ours != theirs) {
+                differ += 1;
+            }
+        }
+        notes.push(format!("Spark-DSG answers compared on {} queries: {differ} differ", map.len()));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok((rows, notes))
+}

@@ -1,0 +1,173 @@
+//! The Yggdrasil rungs: vanilla (brute force over the ported structure, as the paper
+//! runs it) and chocolate, mint, saffron (the store's spatial API scoped to the room's
+//! claimed-mesh layer; mint and saffron have live indexes, chocolate scans).
+
+use super::Answer;
+use super::harness::Target;
+use super::workload::Query;
+use rustc_hash::FxHashMap;
+use ygg_store::layout::{self, Layout};
+use ygg_store::query::{self, ConeView};
+use ygg_store::{LayerId, NodeId, SceneView, Scope};
+
+/// Where a room's objects live in a per-room layout.
+#[derive(Clone, Copy)]
+struct RoomScope {
+    /// The room's claimed-mesh layer.
+    mesh_layer: LayerId,
+    /// The room's "claimed" group node (parent of its objects).
+    claimed: NodeId,
+}
+
+/// One Yggdrasil rung over any view (the live graph or an archived snapshot).
+pub struct YggTarget<V: SceneView> {
+    name: String,
+    layout: Layout,
+    view: V,
+    rooms: FxHashMap<u64, RoomScope>,
+    mesh_layer: Option<LayerId>,
+}
+
+impl<V: SceneView> YggTarget<V> {
+    /// Wraps a view built with `layout`.
+    pub fn new(name: String, layout: Layout, view: V) -> Self {
+        let mut rooms = FxHashMap::default();
+        let mut mesh_layer = None;
+        for (layer, room) in layout::object_mesh_layers(&view) {
+            match room {
+                None => mesh_layer = Some(layer),
+                Some(room) => {
+                    let claimed = view
+                        .layer_by_name(&format!("room:{}", room.0))
+                        .and_then(|l| view.layer_nodes(l).map(|n| view.node_id(n)).min());
+                    if let Some(claimed) = claimed {
+                        rooms.insert(room.0, RoomScope { mesh_layer: layer, claimed });
+                    }
+                }
+            }
+        }
+        YggTarget { name, layout, view, rooms, mesh_layer }
+    }
+
+    /// The view queried.
+    pub fn view(&self) -> &V {
+        &self.view
+    }
+
+    /// The object owning a mesh node (its parent).
+    fn owner(&self, mesh: NodeId) -> Option<u64> {
+        self.view.node(mesh).and_then(|n| self.view.parent(n)).map(|p| p.0)
+    }
+
+    /// Vanilla's room of an object: climb parents to a node of the rooms' layer.
+    fn vanilla_room(&self, object: NodeId) -> Option<u64> {
+        let mut cur = self.view.node(object)?;
+        for _ in 0..8 {
+            let p = self.view.parent(cur)?;
+            cur = self.view.node(p)?;
+            if self.view.layer_name(self.view.node_layer(cur)) == Some("ROOMS") {
+                return Some(p.0);
+            }
+        }
+        None
+    }
+
+    /// Vanilla brute force: every mesh node whose object is in `room`, with its points.
+    fn vanilla_candidates(&self, room: u64, mut f: impl FnMut(u64, &[[f32; 3]])) {
+        let Some(mesh) = self.mesh_layer else { return };
+        for n in self.view.layer_nodes(mesh) {
+            let Some(object) = self.view.parent(n) else { continue };
+            if self.vanilla_room(object) == Some(room) {
+                f(object.0, self.view.points(n));
+            }
+        }
+    }
+
+    fn owners(&self, ids: impl IntoIterator<Item = NodeId>) -> Answer {
+        let mut out: Answer = ids.into_iter().filter_map(|m| self.owner(m)).collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+}
+
+impl<V: SceneView> Target for YggTarget<V> {
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    fn answer(&self, q: &Query) -> Answer {
+        if self.layout == Layout::Vanilla {
+            return self.answer_vanilla(q);
+        }
+        let scope = |room: &u64| self.rooms.get(room).copied();
+        match q {
+            Query::Nearest { room, point } => {
+                let Some(s) = scope(room) else { return Vec::new() };
+                let found = query::nearest_nodes(&self.view, Scope::Layer(s.mesh_layer), *point, 1).unwrap_or_default();
+                self.owners(found.into_iter().map(|(id, _)| id))
+            }
+            Query::Within { room, point, radius } => {
+                let Some(s) = scope(room) else { return Vec::new() };
+                let found = query::nodes_within_radius(&self.view, Scope::Layer(s.mesh_layer), *point, *radius).unwrap_or_default();
+                self.owners(found)
+            }
+            Query::Visible { room, eye, dir, half_angle_deg, range } => {
+                let Some(s) = scope(room) else { return Vec::new() };
+                let cone = cone_view(eye, dir, *half_angle_deg, *range);
+                let found = query::visible(&self.view, s.claimed, &cone).unwrap_or_default();
+                // Mesh nodes map to their objects; objects carry no points of their own.
+                self.owners(found.into_iter().filter(|id| {
+                    self.view.node(*id).is_some_and(|n| self.view.node_layer(n) == s.mesh_layer)
+                }))
+            }
+            Query::Label { label } => query::nodes_with_label(&self.view, Scope::Graph, label).into_iter().map(|n| n.0).collect(),
+        }
+    }
+}
+
+impl<V: SceneView> YggTarget<V> {
+    fn answer_vanilla(&self, q: &Query) -> Answer {
+        match q {
+            Query::Nearest { room, point } => {
+                let mut best: Option<(f32, u64)> = None;
+                self.vanilla_candidates(*room, |object, points| {
+                    for p in points {
+                        let d = ygg_store::distance_squared(p, point);
+                        if best.is_none_or(|(bd, bid)| d < bd || (d == bd && object < bid)) {
+                            best = Some((d, object));
+                        }
+                    }
+                });
+                best.map(|b| b.1).into_iter().collect()
+            }
+            Query::Within { room, point, radius } => {
+                let mut out = Vec::new();
+                self.vanilla_candidates(*room, |object, points| {
+                    if points.iter().any(|p| query::within_radius(p, point, *radius)) {
+                        out.push(object);
+                    }
+                });
+                out.sort_unstable();
+                out
+            }
+            Query::Visible { room, eye, dir, half_angle_deg, range } => {
+                let cone = cone_view(eye, dir, *half_angle_deg, *range);
+                let mut out = Vec::new();
+                self.vanilla_candidates(*room, |object, points| {
+                    if points.iter().any(|p| cone.contains(p)) {
+                        out.push(object);
+                    }
+                });
+                out.sort_unstable();
+                out
+            }
+            Query::Label { label } => query::nodes_with_label(&self.view, Scope::Graph, label).into_iter().map(|n| n.0).collect(),
+        }
+    }
+}
+
+/// The workload's cone as the store's view cone.
+pub fn cone_view(eye: &[f32; 3], dir: &[f32; 3], half_angle_deg: f32, range: f32) -> ConeView {
+    ConeView { eye: *eye, dir: *dir, half_angle: half_angle_deg.to_radians(), range }
+}

@@ -1,0 +1,96 @@
+//! Errors of the reader: one enum per operation.
+
+use crate::protocol::{ENV_IOX2_PREFIX, PrefixError, SceneNameError, SegmentError};
+
+/// Why [`ReaderBuilder::open`](crate::ReaderBuilder::open) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReaderOpenError {
+    /// The scene name cannot name services.
+    #[error(transparent)]
+    InvalidSceneName(#[from] SceneNameError),
+    /// The iceoryx2 prefix is not a valid file name.
+    #[error(transparent)]
+    InvalidPrefix(#[from] PrefixError),
+    /// No writer has published this scene (its services do not exist).
+    #[error(
+        "no writer publishes scene {scene:?} (is the writer running? writer and readers must \
+         share {ENV_IOX2_PREFIX})"
+    )]
+    NoWriter {
+        /// The scene.
+        scene: String,
+    },
+    /// The iceoryx2 node could not be created.
+    #[error("cannot create the iceoryx2 node: {reason}")]
+    Node {
+        /// iceoryx2's description.
+        reason: String,
+    },
+    /// A service exists but cannot be opened (other protocol version, too many readers, ...).
+    #[error("cannot open service {service:?}: {reason}")]
+    Service {
+        /// The service name.
+        service: String,
+        /// iceoryx2's description.
+        reason: String,
+    },
+    /// A port (subscriber, listener, notifier) could not be created, for example because the
+    /// scene already has `max_readers` readers.
+    #[error("cannot create a port on service {service:?}: {reason}")]
+    Port {
+        /// The service name.
+        service: String,
+        /// iceoryx2's description.
+        reason: String,
+    },
+}
+
+/// Why receiving a snapshot failed. The last good snapshot stays available through
+/// [`SegmentSubscriber::current`](crate::SegmentSubscriber::current).
+#[derive(Debug, thiserror::Error)]
+pub enum ReceiveError {
+    /// The writer exited or died. Reported once per writer; the reader keeps the last snapshot
+    /// and picks up a restarted writer by itself.
+    #[error("the writer of scene {scene:?} is gone; keeping the last snapshot")]
+    WriterGone {
+        /// The scene.
+        scene: String,
+    },
+    /// A segment broke the protocol (shared memory is untrusted input). It was dropped.
+    #[error("invalid segment on {service:?}: {source}")]
+    Corrupt {
+        /// The service it arrived on.
+        service: String,
+        /// What is wrong with it.
+        #[source]
+        source: SegmentError,
+    },
+    /// The application holds so many old snapshots that no new sample can be received on
+    /// this service. Drop old snapshots.
+    #[error("too many samples of {service:?} are held by old snapshots; drop some")]
+    BorrowLimit {
+        /// The service.
+        service: String,
+    },
+    /// A connection to the writer's shared memory failed.
+    #[error("connection failure on {service:?}: {reason}")]
+    Connection {
+        /// The service.
+        service: String,
+        /// iceoryx2's description.
+        reason: String,
+    },
+    /// A layer named by a manifest could not be subscribed to.
+    #[error(transparent)]
+    Open(#[from] ReaderOpenError),
+    /// Waiting for events failed.
+    #[error("waiting for events failed: {reason}")]
+    Wait {
+        /// iceoryx2's description.
+        reason: String,
+    },
+    /// SIGINT or SIGTERM arrived (only with
+    /// [`ReaderBuilder::handle_termination_signals`](crate::ReaderBuilder::handle_termination_signals)).
+    #[error("termination requested by a signal")]
+    Terminated,
+}

@@ -1,0 +1,100 @@
+//! Reading Spark-DSG files from disk (plain or gzip-compressed JSON).
+
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+use flate2::read::MultiGzDecoder;
+
+use super::error::DsgImportError;
+use super::json::parse_json_with_progress;
+use super::model::DsgGraph;
+use super::progress::{ImportPhase, ImportProgress};
+
+const CHUNK: usize = 4 << 20;
+
+/// Reads a Spark-DSG JSON file, plain (`.json`) or gzip-compressed (`.json.gz`).
+///
+/// Compression is detected from the gzip magic bytes, not from the extension. The
+/// file name is used in errors and stored as [`DsgGraph::source`].
+///
+/// # Errors
+/// [`DsgImportError::Io`] if the file cannot be read, [`DsgImportError::Gzip`] for
+/// corrupt compressed data, and every error of [`parse_json`](super::parse_json).
+pub fn read_file(path: impl AsRef<Path>) -> Result<DsgGraph, DsgImportError> {
+    read_file_with_progress(path, &mut |_| {})
+}
+
+/// [`read_file`] that reports [`ImportPhase::Read`], [`ImportPhase::Decompress`]
+/// (gzip only), [`ImportPhase::Parse`], [`ImportPhase::Validate`] and
+/// [`ImportPhase::Done`] to `progress`.
+///
+/// # Errors
+/// As [`read_file`].
+pub fn read_file_with_progress(
+    path: impl AsRef<Path>,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<DsgGraph, DsgImportError> {
+    let path = path.as_ref();
+    let name = path.display().to_string();
+    let bytes = read_bytes(path, &name, progress)?;
+    parse_json_with_progress(&bytes, &name, progress)
+}
+
+/// Reads a file and gunzips it when it starts with the gzip magic bytes.
+pub(crate) fn read_bytes(
+    path: &Path,
+    name: &str,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<Vec<u8>, DsgImportError> {
+    let io_err = |source| DsgImportError::Io {
+        file: name.to_owned(),
+        source,
+    };
+    let mut file = File::open(path).map_err(io_err)?;
+    let total = file.metadata().map_err(io_err)?.len();
+    let mut raw = Vec::with_capacity(usize::try_from(total).unwrap_or(0).saturating_add(1));
+    progress(ImportProgress::new(ImportPhase::Read, 0, Some(total)));
+    read_chunked(&mut file, &mut raw, |n| {
+        progress(ImportProgress::new(ImportPhase::Read, n, Some(total)));
+    })
+    .map_err(io_err)?;
+    if !raw.starts_with(&[0x1f, 0x8b]) {
+        return Ok(raw);
+    }
+    // The gzip trailer's last 4 bytes hold the uncompressed size modulo 2^32.
+    let hint = raw
+        .len()
+        .checked_sub(4)
+        .and_then(|at| raw.get(at..))
+        .and_then(|t| <[u8; 4]>::try_from(t).ok())
+        .map(|t| u64::from(u32::from_le_bytes(t)));
+    let capacity = hint
+        .and_then(|h| usize::try_from(h).ok())
+        .unwrap_or(0)
+        .min(raw.len().saturating_mul(64));
+    let mut out = Vec::with_capacity(capacity);
+    progress(ImportProgress::new(ImportPhase::Decompress, 0, hint));
+    read_chunked(&mut MultiGzDecoder::new(&raw[..]), &mut out, |n| {
+        progress(ImportProgress::new(ImportPhase::Decompress, n, hint));
+    })
+    .map_err(|source| DsgImportError::Gzip {
+        file: name.to_owned(),
+        source,
+    })?;
+    Ok(out)
+}
+
+fn read_chunked(
+    r: &mut impl Read,
+    out: &mut Vec<u8>,
+    mut report: impl FnMut(u64),
+) -> std::io::Result<()> {
+    loop {
+        let n = r.by_ref().take(CHUNK as u64).read_to_end(out)?;
+        report(out.len() as u64);
+        if n == 0 {
+            return Ok(());
+        }
+    }
+}

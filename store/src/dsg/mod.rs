@@ -1,0 +1,61 @@
+//! Spark-DSG interchange: a JSON importer and a seeded synthetic office generator,
+//! both producing the plain-data [`DsgGraph`].
+//!
+//! * [`parse_json`] / [`read_file`] import Spark-DSG JSON files: v1.1.x (with
+//!   `SPARK_DSG_header`, `layer_keys`, partitions, optional mesh) and the legacy
+//!   v1.0 encoding written by older Hydra (no header, `layer_ids`, agent partitions
+//!   from the node-level `timestamp` and the id's prefix). `.json.gz` is handled.
+//! * [`office::generate`] builds a uHumans2-like office with the paper's counts, so
+//!   benchmarks need no external file.
+//! * [`DsgGraph::counts`] and [`DsgGraph::claim_stats`] summarise a graph (node and
+//!   edge counts; unclaimed / multiply claimed vertices and wrong object boxes).
+//!
+//! # How Spark-DSG maps to [`DsgGraph`]
+//!
+//! | Spark-DSG | `DsgGraph` |
+//! |---|---|
+//! | node `id` (u64 `NodeSymbol`) | [`DsgNode::id`], unchanged |
+//! | `layer` + `partition` | [`DsgNode::layer`] ([`LayerKey`]) |
+//! | `attributes.type` | [`DsgNode::kind`] ([`NodeKind`]) |
+//! | edge between nodes of one layer key | [`DsgGraph::edges`] |
+//! | edge between partitions of one layer id | [`DsgGraph::sibling_edges`] |
+//! | edge between layer ids | [`DsgNode::parent`] of the lower node |
+//! | a second inter-layer edge above one node | [`DsgGraph::extra_parent_edges`] |
+//! | `mesh` | [`DsgGraph::mesh`] (points, faces, labels; colors and stamps dropped) |
+//! | `metadata.labelspaces` | [`DsgGraph::labelspaces`], and [`DsgNode::label`] |
+//!
+//! **Several parents.** The store allows one parent per node. The importer keeps the
+//! first inter-layer edge (in file order) above a node as its parent, and records
+//! every later one in [`DsgGraph::extra_parent_edges`] rather than failing, so that a
+//! Hydra graph with an ambiguous nesting still loads and the choice stays visible.
+//!
+//! # Invariants
+//! See [`DsgGraph`]. The importer checks them all and returns a [`DsgImportError`]
+//! naming the file, node and field otherwise; it never panics on any input.
+
+mod diag;
+mod error;
+mod io;
+mod json;
+mod model;
+mod progress;
+mod raw;
+mod symbol;
+
+pub mod office;
+
+#[doc(inline)]
+pub use self::error::DsgImportError;
+#[doc(inline)]
+pub use self::io::{read_file, read_file_with_progress};
+#[doc(inline)]
+pub use self::json::{parse_json, parse_json_with_progress};
+#[doc(inline)]
+pub use self::model::{
+    ClaimStats, DsgAabb, DsgCounts, DsgEdge, DsgGraph, DsgLayer, DsgMesh, DsgNode, DsgParentEdge,
+    DsgVersion, LayerKey, NodeKind,
+};
+#[doc(inline)]
+pub use self::progress::{ImportPhase, ImportProgress};
+#[doc(inline)]
+pub use self::symbol::NodeSymbol;

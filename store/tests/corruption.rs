@@ -1,0 +1,174 @@
+//! Bad snapshot bytes (truncated, bit-flipped, empty, foreign) give an error, never a
+//! panic; bytes that still validate answer every query without panicking.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use ygg_store::query::{self, Direction};
+use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
+
+/// A small but complete scene: every column of the layout is non-empty.
+fn sample_scene() -> SceneGraph {
+    let mut g = SceneGraph::new();
+    let b = g.add_layer("building").unwrap();
+    let r = g.add_layer("rooms").unwrap();
+    let o = g.add_layer("objects").unwrap();
+    g.add_layer_edge(b, r).unwrap();
+    g.add_layer_edge(r, o).unwrap();
+    g.add_node(NodeId(1), b).unwrap();
+    g.enable_bounding_box(NodeId(1)).unwrap();
+    for room in 0..3u64 {
+        let rid = NodeId(100 + room);
+        g.add_node(rid, r).unwrap();
+        g.nest(NodeId(1), rid).unwrap();
+        g.enable_bounding_box(rid).unwrap();
+        g.set_feature(
+            rid,
+            "name",
+            FeatureValue::from(format!("room{room}").as_str()),
+        )
+        .unwrap();
+        for k in 0..5u64 {
+            let id = NodeId(1000 + room * 10 + k);
+            g.add_node(id, o).unwrap();
+            g.set_geometry(
+                id,
+                vec![
+                    [room as f32, k as f32, 0.5],
+                    [room as f32 + 0.2, k as f32, 1.0],
+                ],
+            )
+            .unwrap();
+            g.add_label(id, ["chair", "light", "desk"][k as usize % 3])
+                .unwrap();
+            g.set_feature(id, "weight", FeatureValue::Float(k as f64))
+                .unwrap();
+            g.set_feature(id, "count", FeatureValue::Int(k as i64))
+                .unwrap();
+            g.set_feature(id, "on", FeatureValue::Bool(k % 2 == 0))
+                .unwrap();
+            g.nest(rid, id).unwrap();
+            if k > 0 {
+                g.add_edge(NodeId(id.0 - 1), id, "next").unwrap();
+            }
+        }
+    }
+    g
+}
+
+/// Runs every query; the point is that none of them panics on validated bytes.
+fn exercise(file: &SnapshotFile) -> usize {
+    let v = file.view();
+    let mut n = 0;
+    for l in v.layers() {
+        n += v.layer_nodes(l).count();
+        n += query::nodes_with_label(&v, Scope::Layer(l), "chair").len();
+        let _ = v.layer_name(l);
+        let _ = v.layer_children(l);
+    }
+    n += query::nodes_with_label(&v, Scope::Graph, "light").len();
+    n += query::nodes_having(&v, Scope::Graph, &["weight", "on"]).len();
+    n += query::edges_matching(&v, Scope::Graph, "next").len();
+    for id in [1, 100, 101, 102, 1000, 1004, 1013, 1024] {
+        let id = NodeId(id);
+        n += query::subtree(&v, id).len();
+        n += query::bfs(&v, id, Direction::Undirected).len();
+        n += query::dfs(&v, id, Direction::Outgoing).len();
+        n += query::edges_from(&v, id).len() + query::edges_to(&v, id).len();
+        if let Some(node) = v.node(id) {
+            n += v.points(node).len() + v.features(node).count() + v.labels(node).count();
+            let _ = v.aabb(node);
+        }
+    }
+    n += query::subgraph(&v, &[NodeId(1), NodeId(100), NodeId(1000)]).node_count();
+    n
+}
+
+fn snapshot_bytes() -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.ygg");
+    sample_scene().save(&path).unwrap();
+    std::fs::read(path).unwrap()
+}
+
+#[test]
+fn intact_snapshot_opens_and_answers() {
+    let bytes = snapshot_bytes();
+    let file = SnapshotFile::from_bytes(&bytes, "intact").unwrap();
+    assert!(exercise(&file) > 0);
+    assert_eq!(file.view().node_count(), sample_scene().node_count());
+}
+
+#[test]
+fn empty_foreign_and_truncated_files_are_errors() {
+    let bytes = snapshot_bytes();
+    assert!(SnapshotFile::from_bytes(&[], "empty").is_err());
+    assert!(SnapshotFile::from_bytes(b"{\"nodes\": []}", "json").is_err());
+    let mut wrong_version = bytes.clone();
+    wrong_version[8] ^= 0xff;
+    let err = SnapshotFile::from_bytes(&wrong_version, "v")
+        .err()
+        .expect("version mismatch");
+    assert!(err.to_string().contains("format version"), "{err}");
+    for cut in (0..bytes.len()).step_by(7) {
+        assert!(
+            SnapshotFile::from_bytes(&bytes[..cut], "truncated").is_err(),
+            "cut at {cut} opened"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty.ygg");
+    std::fs::write(&empty, b"").unwrap();
+    let err = SnapshotFile::open(&empty).err().expect("empty file");
+    assert!(
+        err.to_string().contains("empty.ygg"),
+        "error names the file: {err}"
+    );
+    assert!(SnapshotFile::open(dir.path().join("missing.ygg")).is_err());
+}
+
+#[test]
+fn thousands_of_random_corruptions_never_panic() {
+    let bytes = snapshot_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5eed);
+    let (mut opened, mut refused) = (0, 0);
+    for round in 0..4000 {
+        let mut b = bytes.clone();
+        match round % 4 {
+            0 => {
+                let i = rng.gen_range(0..b.len());
+                b[i] ^= 1 << rng.gen_range(0..8);
+            }
+            1 => {
+                for _ in 0..rng.gen_range(2..16) {
+                    let i = rng.gen_range(0..b.len());
+                    b[i] = rng.r#gen();
+                }
+            }
+            2 => {
+                let i = rng.gen_range(0..b.len() - 8);
+                let v: u64 = rng.r#gen::<u64>() % 4096;
+                b[i..i + 8].copy_from_slice(&v.to_le_bytes());
+            }
+            _ => {
+                let i = rng.gen_range(0..b.len() - 4);
+                b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+            }
+        }
+        match SnapshotFile::from_bytes(&b, "corrupt") {
+            Ok(file) => {
+                exercise(&file);
+                opened += 1;
+            }
+            Err(e) => {
+                assert!(!e.to_string().is_empty());
+                refused += 1;
+            }
+        }
+    }
+    // Both outcomes must occur: flips inside point data still validate, flips in the
+    // structure are refused.
+    assert!(
+        opened > 100 && refused > 100,
+        "opened {opened}, refused {refused}"
+    );
+}

@@ -1,0 +1,277 @@
+//! Property tests: random mutation sequences keep every invariant, refused mutations
+//! leave the graph unchanged, and every query answers the same on the live graph and
+//! on its saved-and-reopened snapshot.
+
+use proptest::prelude::*;
+use ygg_store::query::{self, Direction};
+use ygg_store::{FeatureRef, FeatureValue, LayerId, NodeId, SceneGraph, SceneView, Scope};
+
+#[derive(Clone, Debug)]
+enum Op {
+    AddLayer(u8),
+    RemoveLayer(u8),
+    AddLayerEdge(u8, u8),
+    RemoveLayerEdge(u8, u8),
+    AddNode(u8, u8),
+    RemoveNode(u8),
+    SetGeometry(u8, Vec<[i8; 3]>),
+    SetFeature(u8, u8, i8),
+    RemoveFeature(u8, u8),
+    AddLabel(u8, u8),
+    RemoveLabel(u8, u8),
+    AddEdge(u8, u8, u8),
+    RemoveEdge(u8, u8),
+    Nest(u8, u8),
+    Unnest(u8),
+    EnableBox(u8),
+    DisableBox(u8),
+    NonFinite(u8),
+}
+
+fn op() -> impl Strategy<Value = Op> {
+    let n = 0u8..24;
+    let l = 0u8..6;
+    prop_oneof![
+        2 => l.clone().prop_map(Op::AddLayer),
+        1 => l.clone().prop_map(Op::RemoveLayer),
+        2 => (l.clone(), l.clone()).prop_map(|(a, b)| Op::AddLayerEdge(a, b)),
+        1 => (l.clone(), l.clone()).prop_map(|(a, b)| Op::RemoveLayerEdge(a, b)),
+        6 => (n.clone(), l.clone()).prop_map(|(a, b)| Op::AddNode(a, b)),
+        1 => n.clone().prop_map(Op::RemoveNode),
+        4 => (n.clone(), prop::collection::vec(any::<[i8; 3]>(), 0..4)).prop_map(|(a, p)| Op::SetGeometry(a, p)),
+        2 => (n.clone(), 0u8..3, any::<i8>()).prop_map(|(a, k, v)| Op::SetFeature(a, k, v)),
+        1 => (n.clone(), 0u8..3).prop_map(|(a, k)| Op::RemoveFeature(a, k)),
+        2 => (n.clone(), 0u8..4).prop_map(|(a, k)| Op::AddLabel(a, k)),
+        1 => (n.clone(), 0u8..4).prop_map(|(a, k)| Op::RemoveLabel(a, k)),
+        3 => (n.clone(), n.clone(), 0u8..2).prop_map(|(a, b, d)| Op::AddEdge(a, b, d)),
+        1 => (n.clone(), n.clone()).prop_map(|(a, b)| Op::RemoveEdge(a, b)),
+        4 => (n.clone(), n.clone()).prop_map(|(a, b)| Op::Nest(a, b)),
+        1 => n.clone().prop_map(Op::Unnest),
+        2 => n.clone().prop_map(Op::EnableBox),
+        1 => n.clone().prop_map(Op::DisableBox),
+        1 => n.prop_map(Op::NonFinite),
+    ]
+}
+
+const LABELS: [&str; 4] = ["chair", "light", "desk", "door"];
+const KEYS: [&str; 3] = ["name", "weight", "open"];
+
+fn apply(g: &mut SceneGraph, op: &Op) -> Result<(), ygg_store::GraphEditError> {
+    let node = |i: u8| NodeId(u64::from(i) * 1000 + 7);
+    let layer = |g: &SceneGraph, i: u8| g.layer_id(&format!("layer{i}")).unwrap_or(LayerId(999));
+    match op {
+        Op::AddLayer(i) => g.add_layer(&format!("layer{i}")).map(|_| ()),
+        Op::RemoveLayer(i) => g.remove_layer(layer(g, *i)),
+        Op::AddLayerEdge(a, b) => g.add_layer_edge(layer(g, *a), layer(g, *b)),
+        Op::RemoveLayerEdge(a, b) => g.remove_layer_edge(layer(g, *a), layer(g, *b)),
+        Op::AddNode(n, l) => g.add_node(node(*n), layer(g, *l)),
+        Op::RemoveNode(n) => g.remove_node(node(*n)),
+        Op::SetGeometry(n, pts) => g.set_geometry(
+            node(*n),
+            pts.iter().map(|p| p.map(|c| f32::from(c) / 8.0)).collect(),
+        ),
+        Op::SetFeature(n, k, v) => {
+            let value = match k {
+                0 => FeatureValue::Str(format!("v{}", v % 3)),
+                1 => FeatureValue::Float(f64::from(*v) / 4.0),
+                _ => FeatureValue::Bool(*v > 0),
+            };
+            g.set_feature(node(*n), KEYS[*k as usize], value)
+        }
+        Op::RemoveFeature(n, k) => g.remove_feature(node(*n), KEYS[*k as usize]),
+        Op::AddLabel(n, k) => g.add_label(node(*n), LABELS[*k as usize]),
+        Op::RemoveLabel(n, k) => g.remove_label(node(*n), LABELS[*k as usize]),
+        Op::AddEdge(a, b, d) => g.add_edge(node(*a), node(*b), ["door", "hall"][*d as usize]),
+        Op::RemoveEdge(a, b) => g.remove_edge(node(*a), node(*b)),
+        Op::Nest(a, b) => g.nest(node(*a), node(*b)),
+        Op::Unnest(n) => g.unnest(node(*n)),
+        Op::EnableBox(n) => g.enable_bounding_box(node(*n)),
+        Op::DisableBox(n) => g.disable_bounding_box(node(*n)),
+        Op::NonFinite(n) => g.set_geometry(node(*n), vec![[0.0, f32::NAN, 1.0]]),
+    }
+}
+
+/// Everything a view can tell, in a canonical order: equal fingerprints mean equal graphs.
+fn fingerprint<V: SceneView>(v: &V) -> String {
+    let mut out = String::new();
+    for l in v.layers() {
+        out += &format!(
+            "layer {l} {:?} parents {:?} children {:?}\n",
+            v.layer_name(l),
+            v.layer_parents(l),
+            v.layer_children(l)
+        );
+        let mut nodes: Vec<_> = v.layer_nodes(l).map(|n| v.node_id(n)).collect();
+        nodes.sort_unstable();
+        for id in nodes {
+            let n = v.node(id).expect("listed node resolves");
+            let mut labels: Vec<_> = v.labels(n).collect();
+            labels.sort_unstable();
+            let mut features: Vec<_> = v.features(n).map(|(k, f)| format!("{k}={f:?}")).collect();
+            features.sort_unstable();
+            let out_edges: Vec<_> = v.out_edges(n).collect();
+            let in_edges: Vec<_> = v.in_edges(n).collect();
+            out += &format!(
+                "  {id} pts {:?} parent {:?} children {:?} box {:?} labels {labels:?} features {features:?} out {out_edges:?} in {in_edges:?}\n",
+                v.points(n),
+                v.parent(n),
+                v.children(n),
+                v.aabb(n),
+            );
+        }
+    }
+    out
+}
+
+/// Answers of every non-spatial query on a view, for comparing backends.
+fn query_answers<V: SceneView>(v: &V) -> String {
+    let mut out = String::new();
+    let mut scopes = vec![Scope::Graph];
+    scopes.extend(v.layers().map(Scope::Layer));
+    for scope in scopes {
+        for label in LABELS.iter().chain(&["absent"]) {
+            out += &format!(
+                "{scope:?} label {label} {:?}\n",
+                query::nodes_with_label(v, scope, label)
+            );
+        }
+        out += &format!(
+            "{scope:?} having {:?}\n",
+            query::nodes_having(v, scope, &["name"])
+        );
+        out += &format!(
+            "{scope:?} having2 {:?}\n",
+            query::nodes_having(v, scope, &["name", "open"])
+        );
+        out += &format!(
+            "{scope:?} matching {:?}\n",
+            query::nodes_matching(v, scope, &[("name", FeatureRef::Str("v1"))])
+        );
+        out += &format!(
+            "{scope:?} matching-bool {:?}\n",
+            query::nodes_matching(v, scope, &[("open", FeatureRef::Bool(true))])
+        );
+        out += &format!(
+            "{scope:?} doors {:?}\n",
+            query::edges_matching(v, scope, "door")
+        );
+    }
+    for i in 0..24u64 {
+        let id = NodeId(i * 1000 + 7);
+        out += &format!(
+            "{id}: from {:?} to {:?} parent {:?} children {:?} subtree {:?} bfs {:?} dfs {:?} bfs-u {:?} path {:?}\n",
+            query::edges_from(v, id),
+            query::edges_to(v, id),
+            query::parent(v, id),
+            query::children(v, id),
+            query::subtree(v, id),
+            query::bfs(v, id, Direction::Outgoing),
+            query::dfs(v, id, Direction::Outgoing),
+            query::bfs(v, id, Direction::Undirected),
+            query::shortest_path(
+                v,
+                id,
+                NodeId(((i + 5) % 24) * 1000 + 7),
+                Direction::Undirected
+            ),
+        );
+    }
+    let half: Vec<NodeId> = (0..24u64)
+        .step_by(2)
+        .map(|i| NodeId(i * 1000 + 7))
+        .collect();
+    out += &fingerprint(&query::subgraph(v, &half));
+    out
+}
+
+/// A graph with four layers in a DAG (0 -> 1 -> 2 -> 3, 0 -> 2) and the first `nodes`
+/// nodes spread over them, so that random nestings and edges often succeed.
+fn seeded_graph(nodes: u8) -> SceneGraph {
+    let mut g = SceneGraph::new();
+    for i in 0..4 {
+        apply(&mut g, &Op::AddLayer(i)).unwrap();
+    }
+    for (a, b) in [(0, 1), (1, 2), (0, 2), (2, 3)] {
+        apply(&mut g, &Op::AddLayerEdge(a, b)).unwrap();
+    }
+    for n in 0..nodes {
+        apply(&mut g, &Op::AddNode(n, n % 4)).unwrap();
+    }
+    g
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_mutations_keep_invariants_and_refused_ones_change_nothing(seed in 0u8..20, ops in prop::collection::vec(op(), 1..160)) {
+        let mut g = seeded_graph(seed);
+        for op in &ops {
+            let before = fingerprint(&g);
+            let result = apply(&mut g, op);
+            if let Err(e) = g.check_invariants() {
+                panic!("after {op:?} ({result:?}): {e}");
+            }
+            if result.is_err() {
+                prop_assert_eq!(&before, &fingerprint(&g), "refused {:?} changed the graph", op);
+            }
+        }
+    }
+
+    #[test]
+    fn queries_agree_on_live_graph_and_reopened_snapshot(seed in 0u8..20, ops in prop::collection::vec(op(), 1..160)) {
+        let mut g = seeded_graph(seed);
+        for op in &ops {
+            let _ = apply(&mut g, op);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("g.ygg");
+        g.save(&path).unwrap();
+        let file = ygg_store::SnapshotFile::open(&path).unwrap();
+        let view = file.view();
+        prop_assert_eq!(fingerprint(&g), fingerprint(&view));
+        prop_assert_eq!(query_answers(&g), query_answers(&view));
+    }
+}
+
+#[test]
+fn cycle_in_layer_dag_is_refused() {
+    let mut g = SceneGraph::new();
+    let a = g.add_layer("a").unwrap();
+    let b = g.add_layer("b").unwrap();
+    let c = g.add_layer("c").unwrap();
+    g.add_layer_edge(a, b).unwrap();
+    g.add_layer_edge(b, c).unwrap();
+    assert_eq!(
+        g.add_layer_edge(c, a),
+        Err(ygg_store::GraphEditError::WouldCreateCycle {
+            parent: c,
+            child: a
+        })
+    );
+    assert!(g.add_layer_edge(a, a).is_err());
+}
+
+#[test]
+fn bounding_box_shrinks_when_the_extreme_point_moves_inward() {
+    let mut g = SceneGraph::new();
+    let rooms = g.add_layer("rooms").unwrap();
+    let objects = g.add_layer("objects").unwrap();
+    g.add_layer_edge(rooms, objects).unwrap();
+    g.add_node(NodeId(1), rooms).unwrap();
+    g.enable_bounding_box(NodeId(1)).unwrap();
+    for (id, x) in [(2, 0.0), (3, 5.0)] {
+        g.add_node(NodeId(id), objects).unwrap();
+        g.set_geometry(NodeId(id), vec![[x, 0.0, 0.0]]).unwrap();
+        g.nest(NodeId(1), NodeId(id)).unwrap();
+    }
+    let b = |g: &SceneGraph| g.node(NodeId(1)).and_then(|n| g.aabb(n));
+    assert_eq!(b(&g).unwrap().max[0], 5.0);
+    g.set_geometry(NodeId(3), vec![[1.0, 0.0, 0.0]]).unwrap();
+    assert_eq!(b(&g).unwrap().max[0], 1.0);
+    g.remove_node(NodeId(3)).unwrap();
+    assert_eq!(b(&g).unwrap().max[0], 0.0);
+    g.unnest(NodeId(2)).unwrap();
+    assert_eq!(b(&g), None);
+    g.check_invariants().unwrap();
+}
