@@ -282,10 +282,10 @@ impl SceneGraph {
             return;
         }
         self.indexes.nodes.remove(&node.id);
-        if let Some(&h) = self.indexes.handle_of.get(&node.id) {
-            if let Some(t) = self.indexes.layers.get_mut(&node.layer) {
-                apply(t, h, &node.points, &[]);
-            }
+        if let Some(&h) = self.indexes.handle_of.get(&node.id)
+            && let Some(t) = self.indexes.layers.get_mut(&node.layer)
+        {
+            apply(t, h, &node.points, &[]);
         }
         self.indexes.release(node.id);
     }
