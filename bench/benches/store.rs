@@ -2,6 +2,7 @@
 //! without bounding boxes, label query latency (frequent, rare, absent) on the live
 //! graph and the archive, and validated open of a ~40 MB snapshot.
 #![expect(clippy::unwrap_used, reason = "acceptable in benchmarks")]
+#![allow(missing_docs, reason = "criterion macros generate undocumented items")]
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;

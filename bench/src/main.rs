@@ -24,12 +24,15 @@ enum Command {
     },
     /// Archive size and bytes per node for feature-less graphs of 10k, 100k and 1M nodes.
     ArchiveSizes,
+    /// The paper's ablation ladder on the office workload.
+    Ladder(ladder::LadderArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     match Cli::parse().command {
         Command::Demo { objects } => demo(objects),
         Command::ArchiveSizes => archive_sizes(),
+        Command::Ladder(args) => ladder::run(&args),
     }
 }
 

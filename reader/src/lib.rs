@@ -26,3 +26,6 @@ pub use protocol::ManifestEntry;
 pub use snapshot::Snapshot;
 #[doc(inline)]
 pub use subscriber::{ReaderBuilder, SegmentSubscriber, WriterStatus};
+mod scene;
+#[doc(inline)]
+pub use scene::{SceneReader, SceneReceiveError, SceneSnapshot};

@@ -62,7 +62,7 @@ fn remove_points(node: &mut Node, points: &[Point]) -> bool {
 
 impl SceneGraph {
     /// Every point in the sub-tree of `id`.
-    fn subtree_points(&self, id: NodeId) -> Vec<Point> {
+    fn all_subtree_points(&self, id: NodeId) -> Vec<Point> {
         let mut out = Vec::new();
         let mut stack = vec![id];
         while let Some(n) = stack.pop() {
@@ -88,7 +88,7 @@ impl SceneGraph {
 
     /// Recomputes an enabled box and its face counts from the whole sub-tree.
     pub(crate) fn recompute_box(&mut self, id: NodeId) {
-        let points = self.subtree_points(id);
+        let points = self.all_subtree_points(id);
         let node = self.nodes.get_mut(&id).expect("exists");
         node.aabb = None;
         node.face_counts = [0; 6];
@@ -127,7 +127,7 @@ impl SceneGraph {
     /// Keeps boxes exact after `child`'s sub-tree was nested under `parent`.
     pub(crate) fn subtree_joined(&mut self, parent: NodeId, child: NodeId) {
         if self.any_box_at_or_above(parent) {
-            let points = self.subtree_points(child);
+            let points = self.all_subtree_points(child);
             self.update_boxes(parent, &[], &points);
         }
     }
@@ -135,7 +135,7 @@ impl SceneGraph {
     /// Keeps boxes exact after `child`'s sub-tree left `parent`.
     pub(crate) fn subtree_left(&mut self, parent: NodeId, child: NodeId) {
         if self.any_box_at_or_above(parent) {
-            let points = self.subtree_points(child);
+            let points = self.all_subtree_points(child);
             self.update_boxes(parent, &points, &[]);
         }
     }

@@ -451,8 +451,15 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
     }
     if matches!(layout, Layout::Mint | Layout::Saffron) {
         for o in &sorted_objects {
-            let r = b.g.enable_bounding_box(NodeId(o.id));
+            let r =
+                b.g.enable_bounding_box(NodeId(o.id))
+                    .and_then(|()| b.g.enable_node_index(NodeId(o.id)));
             b.edit(r)?;
+        }
+        for r in &rooms {
+            let layer = b.layers[&claimed_mesh_layer_name(NodeId(r.id))];
+            let res = b.g.enable_layer_index(layer);
+            b.edit(res)?;
         }
     }
     Ok(b.g)

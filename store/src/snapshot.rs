@@ -159,6 +159,10 @@ pub struct Manifest {
     pub version: u32,
     /// Generation of the whole cut (increases with every publish).
     pub generation: u64,
+    /// When the writer published this cut: nanoseconds since the Unix epoch (0 for a
+    /// file). Readers on the same host subtract it from their clock to measure
+    /// publish-to-visible latency.
+    pub published_unix_ns: u64,
     /// Layers, ascending by id.
     pub layers: Vec<ManifestLayer>,
     /// Label -> layers holding it, ascending.
@@ -318,6 +322,7 @@ impl SceneGraph {
         Manifest {
             version: FORMAT_VERSION,
             generation,
+            published_unix_ns: 0,
             layers,
             label_layers: graph_index(&self.label_layers),
             key_layers: graph_index(&self.key_layers),
@@ -653,6 +658,28 @@ impl SnapshotFile {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+}
+
+/// Re-derives a layer segment from bytes that [`validate_layer`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_layer`] accepted.
+pub unsafe fn layer_unchecked(bytes: &[u8]) -> &ArchivedLayerSegment {
+    // SAFETY: the caller guarantees that `validate_layer` (bytecheck + `check_layer`)
+    // accepted these very bytes and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(bytes) }
+}
+
+/// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_manifest`] accepted.
+pub unsafe fn manifest_unchecked(bytes: &[u8]) -> &ArchivedManifest {
+    // SAFETY: the caller guarantees that `validate_manifest` accepted these very bytes
+    // and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedManifest>(bytes) }
 }
 
 // ---- validation ---------------------------------------------------------------------
@@ -996,6 +1023,19 @@ impl<'a> ArchivedScene<'a> {
     /// The manifest's generation.
     pub fn generation(&self) -> u64 {
         self.manifest.generation.to_native()
+    }
+
+    /// When the cut was published (nanoseconds since the Unix epoch; 0 for files).
+    pub fn published_unix_ns(&self) -> u64 {
+        self.manifest.published_unix_ns.to_native()
+    }
+
+    /// The generation of each layer in this cut, ascending by layer id.
+    pub fn layer_generations(&self) -> impl Iterator<Item = (LayerId, u64)> + '_ {
+        self.manifest
+            .layers
+            .iter()
+            .map(|m| (LayerId(m.id.to_native()), m.generation.to_native()))
     }
 
     /// The segment of a layer.

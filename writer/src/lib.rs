@@ -23,3 +23,7 @@ pub use error::{PublishError, WriterCreateError, WriterWaitError};
 pub use publisher::{DEFAULT_INITIAL_SEGMENT_BYTES, SegmentPublisher, WriterBuilder};
 #[doc(inline)]
 pub use ygg_reader::protocol::ManifestEntry;
+mod scene;
+#[doc(inline)]
+pub use scene::{PublishReport, SceneWriter, unix_ns};
+pub mod replay;

@@ -3,9 +3,11 @@
 //! by scanning it, as in the paper's baseline), the mesh as a separate vertex array
 //! that objects index into with `mesh_connections`.
 
+use super::Answer;
 use super::workload::Query;
-use super::{Answer, cone_contains};
+use super::ygg::cone_view;
 use ygg_store::dsg::{DsgGraph, NodeKind};
+use ygg_store::query::within_radius;
 use ygg_store::{Point, distance_squared};
 
 /// One node, as Spark-DSG stores it.
@@ -30,11 +32,32 @@ impl FlatDsg {
         let nodes = dsg
             .nodes
             .iter()
-            .map(|n| FlatNode { id: n.id, kind: n.kind, label: n.label.clone(), mesh_connections: n.mesh_connections.clone() })
+            .map(|n| FlatNode {
+                id: n.id,
+                kind: n.kind,
+                label: n.label.clone(),
+                mesh_connections: n.mesh_connections.clone(),
+            })
             .collect();
-        let mut edges: Vec<(u64, u64, bool)> = dsg.edges.iter().map(|e| (e.source, e.target, false)).collect();
-        edges.extend(dsg.nodes.iter().filter_map(|n| n.parent.map(|p| (p, n.id, true))));
-        FlatDsg { nodes, edges, mesh: dsg.mesh.as_ref().map(|m| m.points.clone()).unwrap_or_default() }
+        let mut edges: Vec<(u64, u64, bool)> = dsg
+            .edges
+            .iter()
+            .map(|e| (e.source, e.target, false))
+            .collect();
+        edges.extend(
+            dsg.nodes
+                .iter()
+                .filter_map(|n| n.parent.map(|p| (p, n.id, true))),
+        );
+        FlatDsg {
+            nodes,
+            edges,
+            mesh: dsg
+                .mesh
+                .as_ref()
+                .map(|m| m.points.clone())
+                .unwrap_or_default(),
+        }
     }
 
     /// Number of nodes.
@@ -44,7 +67,14 @@ impl FlatDsg {
 
     /// Approximate heap bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.iter().map(|n| std::mem::size_of::<FlatNode>() + n.mesh_connections.len() * 4 + n.label.as_ref().map_or(0, |l| l.len())).sum::<usize>()
+        self.nodes
+            .iter()
+            .map(|n| {
+                std::mem::size_of::<FlatNode>()
+                    + n.mesh_connections.len() * 4
+                    + n.label.as_ref().map_or(0, |l| l.len())
+            })
+            .sum::<usize>()
             + self.edges.len() * std::mem::size_of::<(u64, u64, bool)>()
             + self.mesh.len() * 12
     }
@@ -57,7 +87,11 @@ impl FlatDsg {
         let mut cur = self.parent(id);
         for _ in 0..8 {
             let c = cur?;
-            if self.nodes.iter().any(|n| n.id == c && n.kind == NodeKind::Room) {
+            if self
+                .nodes
+                .iter()
+                .any(|n| n.id == c && n.kind == NodeKind::Room)
+            {
                 return Some(c);
             }
             cur = self.parent(c);
@@ -68,20 +102,9 @@ impl FlatDsg {
     /// Objects in `room` with their claimed vertices (brute force: every object's room
     /// is found through the edge list).
     fn room_objects(&self, room: u64) -> impl Iterator<Item = &FlatNode> + '_ {
-        self.nodes.iter().filter(move |n| n.kind == NodeKind::Object && self.room_of(n.id) == Some(room))
-    }
-
-    /// Moves every vertex an object claims.
-    pub fn translate_object(&mut self, id: u64, t: Point) {
-        if let Some(n) = self.nodes.iter().find(|n| n.id == id) {
-            let mut v = n.mesh_connections.clone();
-            v.sort_unstable();
-            v.dedup();
-            for i in v {
-                let p = &mut self.mesh[i as usize];
-                *p = [p[0] + t[0], p[1] + t[1], p[2] + t[2]];
-            }
-        }
+        self.nodes
+            .iter()
+            .filter(move |n| n.kind == NodeKind::Object && self.room_of(n.id) == Some(room))
     }
 
     /// Answers one workload query by brute force.
@@ -99,21 +122,38 @@ impl FlatDsg {
                 }
                 best.map(|b| b.1).into_iter().collect()
             }
-            Query::Within { room, point, radius } => {
-                let r2 = radius * radius;
+            Query::Within {
+                room,
+                point,
+                radius,
+            } => {
                 let mut out: Answer = self
                     .room_objects(*room)
-                    .filter(|o| o.mesh_connections.iter().any(|&v| distance_squared(&self.mesh[v as usize], point) <= r2))
+                    .filter(|o| {
+                        o.mesh_connections
+                            .iter()
+                            .any(|&v| within_radius(&self.mesh[v as usize], point, *radius))
+                    })
                     .map(|o| o.id)
                     .collect();
                 out.sort_unstable();
                 out
             }
-            Query::Visible { room, eye, dir, half_angle_deg, range } => {
-                let cos = half_angle_deg.to_radians().cos();
+            Query::Visible {
+                room,
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+            } => {
+                let cone = cone_view(eye, dir, *half_angle_deg, *range);
                 let mut out: Answer = self
                     .room_objects(*room)
-                    .filter(|o| o.mesh_connections.iter().any(|&v| cone_contains(eye, dir, cos, *range, &self.mesh[v as usize])))
+                    .filter(|o| {
+                        o.mesh_connections
+                            .iter()
+                            .any(|&v| cone.contains(&self.mesh[v as usize]).unwrap_or(false))
+                    })
                     .map(|o| o.id)
                     .collect();
                 out.sort_unstable();
@@ -123,7 +163,9 @@ impl FlatDsg {
                 let mut out: Answer = self
                     .nodes
                     .iter()
-                    .filter(|n| n.kind == NodeKind::Object && n.label.as_deref() == Some(label.as_str()))
+                    .filter(|n| {
+                        n.kind == NodeKind::Object && n.label.as_deref() == Some(label.as_str())
+                    })
                     .map(|n| n.id)
                     .collect();
                 out.sort_unstable();

@@ -55,18 +55,30 @@ pub fn time_target(target: &dyn Target, workload: &Workload, reps: usize) -> Vec
         .into_iter()
         .map(|(query, mut s)| {
             let (median_us, p99_us) = median_p99(&mut s);
-            Row { target: name.clone(), query, median_us, p99_us }
+            Row {
+                target: name.clone(),
+                query,
+                median_us,
+                p99_us,
+            }
         })
         .collect()
 }
 
 /// Answers of every query on every target; `Err` describes the first disagreement with
 /// the first target.
-pub fn compare_answers(targets: &[&dyn Target], workload: &Workload) -> Result<Vec<Answer>, String> {
+pub fn compare_answers(
+    targets: &[&dyn Target],
+    workload: &Workload,
+) -> Result<Vec<Answer>, String> {
     let Some((reference, rest)) = targets.split_first() else {
         return Ok(Vec::new());
     };
-    let answers: Vec<Answer> = workload.queries.iter().map(|q| reference.answer(q)).collect();
+    let answers: Vec<Answer> = workload
+        .queries
+        .iter()
+        .map(|q| reference.answer(q))
+        .collect();
     for t in rest {
         for (i, (q, want)) in workload.queries.iter().zip(&answers).enumerate() {
             let got = t.answer(q);

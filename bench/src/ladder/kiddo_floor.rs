@@ -17,9 +17,15 @@ impl KiddoFloor {
     /// Builds one tree per room from the claimed vertices of the room's objects.
     pub fn new(dsg: &DsgGraph, room_of: &FxHashMap<u64, u64>) -> Self {
         let mut points: FxHashMap<u64, (Vec<[f32; 3]>, Vec<u64>)> = FxHashMap::default();
-        let mesh = dsg.mesh.as_ref().map(|m| m.points.as_slice()).unwrap_or_default();
+        let mesh = dsg
+            .mesh
+            .as_ref()
+            .map(|m| m.points.as_slice())
+            .unwrap_or_default();
         for o in dsg.nodes.iter().filter(|n| n.kind == NodeKind::Object) {
-            let Some(&room) = room_of.get(&o.id) else { continue };
+            let Some(&room) = room_of.get(&o.id) else {
+                continue;
+            };
             let e = points.entry(room).or_default();
             let mut v = o.mesh_connections.clone();
             v.sort_unstable();
@@ -34,7 +40,9 @@ impl KiddoFloor {
         let rooms = points
             .into_iter()
             .filter(|(_, (p, _))| !p.is_empty())
-            .filter_map(|(room, (p, owners))| Some((room, (ImmutableKdTree::new_from_slice(&p).ok()?, owners))))
+            .filter_map(|(room, (p, owners))| {
+                Some((room, (ImmutableKdTree::new_from_slice(&p).ok()?, owners)))
+            })
             .collect();
         KiddoFloor { rooms }
     }
@@ -48,12 +56,23 @@ impl Target for KiddoFloor {
     fn answer(&self, q: &Query) -> Answer {
         match q {
             Query::Nearest { room, point } => {
-                let Some((tree, owners)) = self.rooms.get(room) else { return Vec::new() };
-                let n = tree.query(point).nearest_one::<SquaredEuclidean<f32>>().execute();
+                let Some((tree, owners)) = self.rooms.get(room) else {
+                    return Vec::new();
+                };
+                let n = tree
+                    .query(point)
+                    .nearest_one::<SquaredEuclidean<f32>>()
+                    .execute();
                 vec![owners[n.item as usize]]
             }
-            Query::Within { room, point, radius } => {
-                let Some((tree, owners)) = self.rooms.get(room) else { return Vec::new() };
+            Query::Within {
+                room,
+                point,
+                radius,
+            } => {
+                let Some((tree, owners)) = self.rooms.get(room) else {
+                    return Vec::new();
+                };
                 let mut out: Answer = tree
                     .query(point)
                     .within::<SquaredEuclidean<f32>>(radius * radius)

@@ -7,23 +7,8 @@ pub mod kiddo_floor;
 pub mod report;
 pub mod workload;
 
-use ygg_store::Point;
-
 /// Sorted object ids answering one query.
 pub type Answer = Vec<u64>;
-
-/// The cone test of Q2, as the workload defines it: `|v - eye| <= range` and the angle
-/// between `v - eye` and the unit `dir` at most the half-angle (`cos_half` is its
-/// cosine); a point at the eye is visible.
-pub fn cone_contains(eye: &Point, dir: &Point, cos_half: f32, range: f32, v: &Point) -> bool {
-    let d = [v[0] - eye[0], v[1] - eye[1], v[2] - eye[2]];
-    let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    if len2 > range * range {
-        return false;
-    }
-    let along = d[0] * dir[0] + d[1] * dir[1] + d[2] * dir[2];
-    len2 == 0.0 || along >= len2.sqrt() * cos_half
-}
 
 pub mod ygg;
 
@@ -67,18 +52,35 @@ pub struct LadderArgs {
 
 /// Runs the ladder and writes its report.
 pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let (per_room, reps) = if args.quick { (args.per_room.min(16), 1) } else { (args.per_room, args.reps.max(1)) };
+    let (per_room, reps) = if args.quick {
+        (args.per_room.min(16), 1)
+    } else {
+        (args.per_room, args.reps.max(1))
+    };
     let t = Instant::now();
     let (dsg, input) = match &args.dsg {
         Some(path) => (dsg::read_file(path)?, path.display().to_string()),
         None => {
-            let p = dsg::office::OfficeParams { seed: 7, scale: args.scale };
-            (dsg::office::generate(p), format!("built-in office (seed 7, scale {})", args.scale))
+            let p = dsg::office::OfficeParams {
+                seed: 7,
+                scale: args.scale,
+            };
+            (
+                dsg::office::generate(p),
+                format!("built-in office (seed 7, scale {})", args.scale),
+            )
         }
     };
-    eprintln!("input: {input} ({} nodes) in {:.1?}", dsg.nodes.len(), t.elapsed());
+    eprintln!(
+        "input: {input} ({} nodes) in {:.1?}",
+        dsg.nodes.len(),
+        t.elapsed()
+    );
     let workload = Workload::generate(&dsg, 42, per_room);
-    eprintln!("workload: {} queries, {reps} repetition(s) each", workload.queries.len());
+    eprintln!(
+        "workload: {} queries, {reps} repetition(s) each",
+        workload.queries.len()
+    );
 
     let flat = flat_dsg::FlatDsg::new(&dsg);
     let mut graphs: Vec<(Layout, SceneGraph)> = Vec::new();
@@ -107,17 +109,27 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         });
     }
 
-    let snapshot = graphs.iter().find(|(l, _)| *l == Layout::Mint).map(|(_, g)| g.to_snapshot()).expect("mint built");
+    let snapshot = graphs
+        .iter()
+        .find(|(l, _)| *l == Layout::Mint)
+        .map(|(_, g)| g.to_snapshot())
+        .expect("mint built");
+    let snapshot_view = snapshot.view();
     let targets: Vec<Box<dyn Target + '_>> = {
         let mut v: Vec<Box<dyn Target + '_>> = vec![Box::new(FlatTarget(&flat))];
         for (l, g) in &graphs {
             v.push(Box::new(ygg::YggTarget::new(l.name().into(), *l, g)));
         }
-        v.push(Box::new(ygg::YggTarget::new("mint-archived".into(), Layout::Mint, snapshot.view())));
+        v.push(Box::new(ygg::YggTarget::new(
+            "mint-archived".into(),
+            Layout::Mint,
+            &snapshot_view,
+        )));
         v
     };
     let refs: Vec<&dyn Target> = targets.iter().map(|t| t.as_ref()).collect();
-    let answers = compare_answers(&refs, &workload).map_err(|e| format!("answers differ, refusing to time: {e}"))?;
+    let answers = compare_answers(&refs, &workload)
+        .map_err(|e| format!("answers differ, refusing to time: {e}"))?;
     eprintln!("answers identical on {} targets", refs.len());
 
     let mut rows = Vec::new();
@@ -131,7 +143,14 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         .filter(|r| r.query.starts_with("Q1"))
         .collect();
     let mut notes = Vec::new();
-    rows.extend(after_update_local(&mut graphs, &workload, &dsg, if args.quick { 20 } else { 200 }));
+    drop(refs);
+    drop(targets);
+    rows.extend(after_update_local(
+        &mut graphs,
+        &workload,
+        &dsg,
+        if args.quick { 20 } else { 200 },
+    ));
 
     if !args.no_spark_dsg {
         match spark_dsg_anchor(&dsg, args, &workload, &answers) {
@@ -198,8 +217,9 @@ fn object_rooms(dsg: &DsgGraph) -> rustc_hash::FxHashMap<u64, u64> {
         .collect()
 }
 
-/// Median latency of moving one mesh point of a random object (the mapping stack's most
-/// frequent edit), with whatever boxes and indexes the layout keeps live.
+/// Median latency of moving one mesh point of an object (the mapping stack's most
+/// frequent edit), with whatever boxes and indexes the layout keeps live. Each sample
+/// moves a point and the next puts it back, so the graph ends as it started.
 fn update_latency(g: &mut SceneGraph, n: usize) -> f64 {
     let mesh_nodes: Vec<NodeId> = layout::object_mesh_layers(&*g)
         .into_iter()
@@ -209,48 +229,83 @@ fn update_latency(g: &mut SceneGraph, n: usize) -> f64 {
         return f64::NAN;
     }
     let mut samples = Vec::with_capacity(n);
-    for i in 0..n {
+    for i in 0..n.div_ceil(2) {
         let id = mesh_nodes[(i * 7919) % mesh_nodes.len()];
-        let mut points = g.node(id).map(|m| g.points(m).to_vec()).unwrap_or_default();
-        let k = i % points.len().max(1);
-        if let Some(p) = points.get_mut(k) {
-            p[0] += if i % 2 == 0 { 0.01 } else { -0.01 };
+        let original = g.node(id).map(|m| g.points(m).to_vec()).unwrap_or_default();
+        let mut moved = original.clone();
+        if let Some(p) = moved.get_mut(i % original.len().max(1)) {
+            p[0] += 0.01;
         }
-        let t = Instant::now();
-        g.set_geometry(id, points).expect("moving a point of an existing node");
-        samples.push(t.elapsed().as_nanos() as f64);
+        for points in [moved, original] {
+            let t = Instant::now();
+            g.set_geometry(id, points)
+                .expect("moving a point of an existing node");
+            samples.push(t.elapsed().as_nanos() as f64);
+        }
     }
     median_p99(&mut samples).0
 }
 
 /// Query after an update, in process: translate an object's mesh, then answer a Q1a in
 /// its room; time from the mutation to the answer.
-fn after_update_local(graphs: &mut [(Layout, SceneGraph)], w: &Workload, dsg: &DsgGraph, n: usize) -> Vec<Row> {
+fn after_update_local(
+    graphs: &mut [(Layout, SceneGraph)],
+    w: &Workload,
+    dsg: &DsgGraph,
+    n: usize,
+) -> Vec<Row> {
     let rooms = object_rooms(dsg);
-    let Some(room) = rooms.get(&w.update_object).copied() else { return Vec::new() };
-    let Some(q) = w.queries.iter().find(|q| matches!(q, workload::Query::Nearest { room: r, .. } if *r == room)).cloned() else {
+    let Some(room) = rooms.get(&w.update_object).copied() else {
+        return Vec::new();
+    };
+    let Some(q) = w
+        .queries
+        .iter()
+        .find(|q| matches!(q, workload::Query::Nearest { room: r, .. } if *r == room))
+        .cloned()
+    else {
         return Vec::new();
     };
     let mut rows = Vec::new();
     for (l, g) in graphs.iter_mut() {
-        let mesh: Vec<NodeId> = ygg_store::query::children(&*g, NodeId(w.update_object));
+        let mesh: Vec<(NodeId, Vec<[f32; 3]>)> =
+            ygg_store::query::children(&*g, NodeId(w.update_object))
+                .into_iter()
+                .map(|m| {
+                    (
+                        m,
+                        g.node(m).map(|x| g.points(x).to_vec()).unwrap_or_default(),
+                    )
+                })
+                .collect();
         let mut samples = Vec::with_capacity(n);
         for i in 0..n {
-            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
             let t = Instant::now();
-            for &m in &mesh {
-                let moved: Vec<[f32; 3]> = g
-                    .node(m)
-                    .map(|x| g.points(x).iter().map(|p| [0, 1, 2].map(|a| p[a] + sign * w.update_translation[a])).collect())
-                    .unwrap_or_default();
-                g.set_geometry(m, moved).expect("moving an existing mesh node");
+            for (m, original) in &mesh {
+                // Alternate between the moved and the original geometry, so the graph
+                // ends bit-for-bit as it started.
+                let points: Vec<[f32; 3]> = if i % 2 == 0 {
+                    original
+                        .iter()
+                        .map(|p| [0, 1, 2].map(|a| p[a] + w.update_translation[a]))
+                        .collect()
+                } else {
+                    original.clone()
+                };
+                g.set_geometry(*m, points)
+                    .expect("moving an existing mesh node");
             }
             let target = ygg::YggTarget::new(String::new(), *l, &*g);
             std::hint::black_box(target.answer(&q));
             samples.push(t.elapsed().as_nanos() as f64);
         }
         let (median_us, p99_us) = median_p99(&mut samples);
-        rows.push(Row { target: l.name().into(), query: "after_update_local".into(), median_us, p99_us });
+        rows.push(Row {
+            target: l.name().into(),
+            query: "after_update_local".into(),
+            median_us,
+            p99_us,
+        });
     }
     rows
 }
@@ -278,7 +333,14 @@ fn spark_dsg_anchor(
     std::fs::write(&wpath, serde_json::to_string(&w.to_json())?)?;
     let out = dir.join("rows.json");
     let mut cmd = std::process::Command::new("bash");
-    cmd.arg(&script).arg("--dsg").arg(&input).arg("--workload").arg(&wpath).arg("--out").arg(&out).current_dir(&root);
+    cmd.arg(&script)
+        .arg("--dsg")
+        .arg(&input)
+        .arg("--workload")
+        .arg(&wpath)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(&root);
     if args.quick {
         cmd.arg("--quick");
     }
@@ -302,12 +364,20 @@ fn spark_dsg_anchor(
     if let Some(map) = v["answers"].as_object() {
         for (id, ids) in map {
             let Ok(i) = id.parse::<usize>() else { continue };
-            let theirs: Vec<u64> = ids.as_array().into_iter().flatten().filter_map(|x| x.as_u64()).collect();
+            let theirs: Vec<u64> = ids
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|x| x.as_u64())
+                .collect();
             if answers.get(i).is_some_and(|ours| *ours != theirs) {
                 differ += 1;
             }
         }
-        notes.push(format!("Spark-DSG answers compared on {} queries: {differ} differ", map.len()));
+        notes.push(format!(
+            "Spark-DSG answers compared on {} queries: {differ} differ",
+            map.len()
+        ));
     }
     let _ = std::fs::remove_dir_all(&dir);
     Ok((rows, notes))

@@ -42,7 +42,11 @@ pub struct Report {
 pub fn machine() -> Value {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
         .unwrap_or_else(|| "unknown".into());
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -101,7 +105,13 @@ impl Report {
         }
         md += "\n## Static cost\n\n| target | nodes | memory (MB) | update (µs, median) |\n|---|---|---|---|\n";
         for s in &self.statics {
-            md += &format!("| {} | {} | {:.1} | {} |\n", s.target, s.nodes, s.memory_mb, fmt_us(s.update_us));
+            md += &format!(
+                "| {} | {} | {:.1} | {} |\n",
+                s.target,
+                s.nodes,
+                s.memory_mb,
+                fmt_us(s.update_us)
+            );
         }
         if !self.notes.is_empty() {
             md += "\n## Notes\n\n";
@@ -125,14 +135,29 @@ impl Report {
         root.fill(&WHITE)?;
         let panels = root.split_evenly((1, families.len()));
         let all: Vec<&Row> = self.rows.iter().chain(&self.anchors).collect();
-        let (lo, hi) = all.iter().map(|r| r.median_us).filter(|v| v.is_finite() && *v > 0.0).fold((f64::MAX, 0f64), |(a, b), v| (a.min(v), b.max(v)));
+        let (lo, hi) = all
+            .iter()
+            .map(|r| r.median_us)
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .fold((f64::MAX, 0f64), |(a, b), v| (a.min(v), b.max(v)));
         let (lo, hi) = (lo.max(1e-3) / 2.0, hi.max(1.0) * 2.0);
         for (panel, family) in panels.iter().zip(families) {
             let queries: Vec<String> = {
-                let mut q: Vec<String> = all.iter().filter(|r| r.query.starts_with(family)).map(|r| r.query.clone()).collect();
+                let mut q: Vec<String> = all
+                    .iter()
+                    .filter(|r| r.query.starts_with(family))
+                    .map(|r| r.query.clone())
+                    .collect();
                 q.dedup();
                 let mut seen = Vec::new();
-                q.retain(|x| if seen.contains(x) { false } else { seen.push(x.clone()); true });
+                q.retain(|x| {
+                    if seen.contains(x) {
+                        false
+                    } else {
+                        seen.push(x.clone());
+                        true
+                    }
+                });
                 q
             };
             let n = queries.len().max(1) as f64;
@@ -146,7 +171,16 @@ impl Report {
                 .configure_mesh()
                 .disable_x_mesh()
                 .x_labels(queries.len().max(1))
-                .x_label_formatter(&|x| queries.get(x.floor() as usize).map(|q| q.trim_start_matches(family).trim_start_matches(['@', ':']).to_owned()).unwrap_or_default())
+                .x_label_formatter(&|x| {
+                    queries
+                        .get(x.floor() as usize)
+                        .map(|q| {
+                            q.trim_start_matches(family)
+                                .trim_start_matches(['@', ':'])
+                                .to_owned()
+                        })
+                        .unwrap_or_default()
+                })
                 .y_desc("µs (median, log)")
                 .draw()?;
             let width = 0.8 / targets.len().max(1) as f64;
@@ -158,16 +192,25 @@ impl Report {
                     .filter_map(|(qi, q)| {
                         let r = all.iter().find(|r| &r.target == t && &r.query == q)?;
                         let x0 = qi as f64 + 0.1 + ti as f64 * width;
-                        Some(Rectangle::new([(x0, lo), (x0 + width, r.median_us.max(lo))], color.filled()))
+                        Some(Rectangle::new(
+                            [(x0, lo), (x0 + width, r.median_us.max(lo))],
+                            color.filled(),
+                        ))
                     })
                     .collect();
                 let series = chart.draw_series(bars)?;
                 if *family == *"Q1a" {
-                    series.label(t.as_str()).legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], color.filled()));
+                    series.label(t.as_str()).legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 10, y + 5)], color.filled())
+                    });
                 }
             }
             if family == "Q1a" {
-                chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .draw()?;
             }
         }
         root.present()?;

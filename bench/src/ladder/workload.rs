@@ -18,9 +18,19 @@ pub enum Query {
     /// Q1a: the object nearest `point` among the room's objects.
     Nearest { room: u64, point: Point },
     /// Q1b: the room's objects with a point within `radius` of `point`.
-    Within { room: u64, point: Point, radius: f32 },
+    Within {
+        room: u64,
+        point: Point,
+        radius: f32,
+    },
     /// Q2: the room's objects with a point inside the cone.
-    Visible { room: u64, eye: Point, dir: Point, half_angle_deg: f32, range: f32 },
+    Visible {
+        room: u64,
+        eye: Point,
+        dir: Point,
+        half_angle_deg: f32,
+        range: f32,
+    },
     /// Q3: objects carrying `label`.
     Label { label: String },
 }
@@ -38,11 +48,23 @@ impl Query {
 
     fn to_json(&self, id: usize) -> Value {
         match self {
-            Query::Nearest { room, point } => json!({"id": id, "family": "Q1a", "room": room, "point": point}),
-            Query::Within { room, point, radius } => {
+            Query::Nearest { room, point } => {
+                json!({"id": id, "family": "Q1a", "room": room, "point": point})
+            }
+            Query::Within {
+                room,
+                point,
+                radius,
+            } => {
                 json!({"id": id, "family": "Q1b", "room": room, "point": point, "radius": radius})
             }
-            Query::Visible { room, eye, dir, half_angle_deg, range } => json!({
+            Query::Visible {
+                room,
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+            } => json!({
                 "id": id, "family": "Q2", "room": room, "eye": eye, "dir": dir,
                 "half_angle_deg": half_angle_deg, "range": range
             }),
@@ -66,7 +88,11 @@ impl Workload {
     /// box (x, y inside the box, z between 0.2 m and 2.8 m).
     pub fn generate(dsg: &DsgGraph, seed: u64, per_room: usize) -> Workload {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut rooms: Vec<_> = dsg.nodes.iter().filter(|n| n.kind == NodeKind::Room).collect();
+        let mut rooms: Vec<_> = dsg
+            .nodes
+            .iter()
+            .filter(|n| n.kind == NodeKind::Room)
+            .collect();
         rooms.sort_by_key(|r| r.id);
         let mut queries = Vec::new();
         for room in &rooms {
@@ -83,13 +109,24 @@ impl Workload {
                     rng.gen_range(lo[1]..=hi[1]),
                     rng.gen_range(0.2f32..=2.8),
                 ];
-                queries.push(Query::Nearest { room: room.id, point });
+                queries.push(Query::Nearest {
+                    room: room.id,
+                    point,
+                });
                 for radius in RADII {
-                    queries.push(Query::Within { room: room.id, point, radius });
+                    queries.push(Query::Within {
+                        room: room.id,
+                        point,
+                        radius,
+                    });
                 }
                 let yaw: f32 = rng.gen_range(0.0..std::f32::consts::TAU);
                 let pitch: f32 = rng.gen_range(-0.4f32..0.4);
-                let dir = [yaw.cos() * pitch.cos(), yaw.sin() * pitch.cos(), pitch.sin()];
+                let dir = [
+                    yaw.cos() * pitch.cos(),
+                    yaw.sin() * pitch.cos(),
+                    pitch.sin(),
+                ];
                 queries.push(Query::Visible {
                     room: room.id,
                     eye: point,
@@ -100,7 +137,9 @@ impl Workload {
             }
         }
         for label in LABELS {
-            queries.push(Query::Label { label: label.into() });
+            queries.push(Query::Label {
+                label: label.into(),
+            });
         }
         let mut objects: Vec<u64> = dsg
             .nodes
@@ -110,7 +149,11 @@ impl Workload {
             .collect();
         objects.sort_unstable();
         let update_object = objects.get(objects.len() / 2).copied().unwrap_or(0);
-        Workload { queries, update_object, update_translation: [0.05, -0.03, 0.0] }
+        Workload {
+            queries,
+            update_object,
+            update_translation: [0.05, -0.03, 0.0],
+        }
     }
 
     /// The workload as the JSON the Spark-DSG anchor script reads.

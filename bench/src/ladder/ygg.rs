@@ -20,20 +20,20 @@ struct RoomScope {
 }
 
 /// One Yggdrasil rung over any view (the live graph or an archived snapshot).
-pub struct YggTarget<V: SceneView> {
+pub struct YggTarget<'a, V: SceneView> {
     name: String,
     layout: Layout,
-    view: V,
+    view: &'a V,
     rooms: FxHashMap<u64, RoomScope>,
     mesh_layer: Option<LayerId>,
 }
 
-impl<V: SceneView> YggTarget<V> {
+impl<'a, V: SceneView> YggTarget<'a, V> {
     /// Wraps a view built with `layout`.
-    pub fn new(name: String, layout: Layout, view: V) -> Self {
+    pub fn new(name: String, layout: Layout, view: &'a V) -> Self {
         let mut rooms = FxHashMap::default();
         let mut mesh_layer = None;
-        for (layer, room) in layout::object_mesh_layers(&view) {
+        for (layer, room) in layout::object_mesh_layers(view) {
             match room {
                 None => mesh_layer = Some(layer),
                 Some(room) => {
@@ -41,22 +41,32 @@ impl<V: SceneView> YggTarget<V> {
                         .layer_by_name(&format!("room:{}", room.0))
                         .and_then(|l| view.layer_nodes(l).map(|n| view.node_id(n)).min());
                     if let Some(claimed) = claimed {
-                        rooms.insert(room.0, RoomScope { mesh_layer: layer, claimed });
+                        rooms.insert(
+                            room.0,
+                            RoomScope {
+                                mesh_layer: layer,
+                                claimed,
+                            },
+                        );
                     }
                 }
             }
         }
-        YggTarget { name, layout, view, rooms, mesh_layer }
-    }
-
-    /// The view queried.
-    pub fn view(&self) -> &V {
-        &self.view
+        YggTarget {
+            name,
+            layout,
+            view,
+            rooms,
+            mesh_layer,
+        }
     }
 
     /// The object owning a mesh node (its parent).
     fn owner(&self, mesh: NodeId) -> Option<u64> {
-        self.view.node(mesh).and_then(|n| self.view.parent(n)).map(|p| p.0)
+        self.view
+            .node(mesh)
+            .and_then(|n| self.view.parent(n))
+            .map(|p| p.0)
     }
 
     /// Vanilla's room of an object: climb parents to a node of the rooms' layer.
@@ -76,7 +86,9 @@ impl<V: SceneView> YggTarget<V> {
     fn vanilla_candidates(&self, room: u64, mut f: impl FnMut(u64, &[[f32; 3]])) {
         let Some(mesh) = self.mesh_layer else { return };
         for n in self.view.layer_nodes(mesh) {
-            let Some(object) = self.view.parent(n) else { continue };
+            let Some(object) = self.view.parent(n) else {
+                continue;
+            };
             if self.vanilla_room(object) == Some(room) {
                 f(object.0, self.view.points(n));
             }
@@ -91,7 +103,7 @@ impl<V: SceneView> YggTarget<V> {
     }
 }
 
-impl<V: SceneView> Target for YggTarget<V> {
+impl<V: SceneView> Target for YggTarget<'_, V> {
     fn name(&self) -> String {
         self.name.clone()
     }
@@ -103,30 +115,58 @@ impl<V: SceneView> Target for YggTarget<V> {
         let scope = |room: &u64| self.rooms.get(room).copied();
         match q {
             Query::Nearest { room, point } => {
-                let Some(s) = scope(room) else { return Vec::new() };
-                let found = query::nearest_nodes(&self.view, Scope::Layer(s.mesh_layer), *point, 1).unwrap_or_default();
+                let Some(s) = scope(room) else {
+                    return Vec::new();
+                };
+                let found = query::nearest_nodes(self.view, Scope::Layer(s.mesh_layer), *point, 1)
+                    .unwrap_or_default();
                 self.owners(found.into_iter().map(|(id, _)| id))
             }
-            Query::Within { room, point, radius } => {
-                let Some(s) = scope(room) else { return Vec::new() };
-                let found = query::nodes_within_radius(&self.view, Scope::Layer(s.mesh_layer), *point, *radius).unwrap_or_default();
+            Query::Within {
+                room,
+                point,
+                radius,
+            } => {
+                let Some(s) = scope(room) else {
+                    return Vec::new();
+                };
+                let found = query::nodes_within_radius(
+                    self.view,
+                    Scope::Layer(s.mesh_layer),
+                    *point,
+                    *radius,
+                )
+                .unwrap_or_default();
                 self.owners(found)
             }
-            Query::Visible { room, eye, dir, half_angle_deg, range } => {
-                let Some(s) = scope(room) else { return Vec::new() };
+            Query::Visible {
+                room,
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+            } => {
+                let Some(s) = scope(room) else {
+                    return Vec::new();
+                };
                 let cone = cone_view(eye, dir, *half_angle_deg, *range);
-                let found = query::visible(&self.view, s.claimed, &cone).unwrap_or_default();
+                let found = query::visible(self.view, s.claimed, &cone).unwrap_or_default();
                 // Mesh nodes map to their objects; objects carry no points of their own.
                 self.owners(found.into_iter().filter(|id| {
-                    self.view.node(*id).is_some_and(|n| self.view.node_layer(n) == s.mesh_layer)
+                    self.view
+                        .node(*id)
+                        .is_some_and(|n| self.view.node_layer(n) == s.mesh_layer)
                 }))
             }
-            Query::Label { label } => query::nodes_with_label(&self.view, Scope::Graph, label).into_iter().map(|n| n.0).collect(),
+            Query::Label { label } => query::nodes_with_label(self.view, Scope::Graph, label)
+                .into_iter()
+                .map(|n| n.0)
+                .collect(),
         }
     }
 }
 
-impl<V: SceneView> YggTarget<V> {
+impl<V: SceneView> YggTarget<'_, V> {
     fn answer_vanilla(&self, q: &Query) -> Answer {
         match q {
             Query::Nearest { room, point } => {
@@ -141,33 +181,54 @@ impl<V: SceneView> YggTarget<V> {
                 });
                 best.map(|b| b.1).into_iter().collect()
             }
-            Query::Within { room, point, radius } => {
+            Query::Within {
+                room,
+                point,
+                radius,
+            } => {
                 let mut out = Vec::new();
                 self.vanilla_candidates(*room, |object, points| {
-                    if points.iter().any(|p| query::within_radius(p, point, *radius)) {
+                    if points
+                        .iter()
+                        .any(|p| query::within_radius(p, point, *radius))
+                    {
                         out.push(object);
                     }
                 });
                 out.sort_unstable();
                 out
             }
-            Query::Visible { room, eye, dir, half_angle_deg, range } => {
+            Query::Visible {
+                room,
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+            } => {
                 let cone = cone_view(eye, dir, *half_angle_deg, *range);
                 let mut out = Vec::new();
                 self.vanilla_candidates(*room, |object, points| {
-                    if points.iter().any(|p| cone.contains(p)) {
+                    if points.iter().any(|p| cone.contains(p).unwrap_or(false)) {
                         out.push(object);
                     }
                 });
                 out.sort_unstable();
                 out
             }
-            Query::Label { label } => query::nodes_with_label(&self.view, Scope::Graph, label).into_iter().map(|n| n.0).collect(),
+            Query::Label { label } => query::nodes_with_label(self.view, Scope::Graph, label)
+                .into_iter()
+                .map(|n| n.0)
+                .collect(),
         }
     }
 }
 
 /// The workload's cone as the store's view cone.
 pub fn cone_view(eye: &[f32; 3], dir: &[f32; 3], half_angle_deg: f32, range: f32) -> ConeView {
-    ConeView { eye: *eye, dir: *dir, half_angle: half_angle_deg.to_radians(), range }
+    ConeView {
+        eye: *eye,
+        dir: *dir,
+        half_angle: half_angle_deg.to_radians(),
+        range,
+    }
 }

@@ -287,3 +287,14 @@ mod tests {
         (u, w)
     }
 }
+
+impl ConeView {
+    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
+    /// point.
+    ///
+    /// # Errors
+    /// As [`visible`], for an invalid cone.
+    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
+        Ok(self.checked()?.contains(p))
+    }
+}

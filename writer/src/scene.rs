@@ -1,0 +1,141 @@
+//! [`SceneWriter`]: a live [`SceneGraph`] published through shared memory, one segment
+//! per changed layer plus a manifest.
+
+use crate::{PublishError, SegmentPublisher, WriterBuilder, WriterCreateError};
+use std::collections::BTreeSet;
+use std::time::SystemTime;
+use ygg_reader::protocol::ManifestEntry;
+use ygg_store::{SceneGraph, SceneView};
+
+/// What one [`SceneWriter::publish`] sent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PublishReport {
+    /// The snapshot generation published.
+    pub generation: u64,
+    /// Layers whose segment was (re)published.
+    pub layers_sent: usize,
+    /// Layers left as they were.
+    pub layers_unchanged: usize,
+    /// Bytes archived into shared memory (layer segments and manifest).
+    pub bytes_sent: usize,
+}
+
+/// Owns a live scene graph and publishes it: on [`SceneWriter::publish`] each layer whose
+/// generation changed since its last publish is archived straight into a loaned
+/// shared-memory sample, then the manifest names the new cut.
+///
+/// ```no_run
+/// # use ygg_writer::SceneWriter;
+/// # use ygg_store::{SceneGraph, NodeId};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut writer = SceneWriter::create("office", SceneGraph::new())?;
+/// let rooms = writer.graph_mut().add_layer("rooms")?;
+/// writer.graph_mut().add_node(NodeId(1), rooms)?;
+/// writer.publish()?; // readers now see the room
+/// # Ok(()) }
+/// ```
+pub struct SceneWriter {
+    graph: SceneGraph,
+    publisher: SegmentPublisher,
+    published_layers: BTreeSet<u32>,
+    generation: u64,
+}
+
+impl SceneWriter {
+    /// Creates the scene's services with default settings and takes ownership of `graph`
+    /// (nothing is published until [`SceneWriter::publish`]).
+    ///
+    /// # Errors
+    /// As [`WriterBuilder::create`]: an invalid name, or a live writer on this scene.
+    pub fn create(scene: &str, graph: SceneGraph) -> Result<Self, WriterCreateError> {
+        Ok(Self::with_publisher(
+            WriterBuilder::new(scene).create()?,
+            graph,
+        ))
+    }
+
+    /// Wraps an already created publisher (for custom [`WriterBuilder`] settings).
+    pub fn with_publisher(publisher: SegmentPublisher, graph: SceneGraph) -> Self {
+        SceneWriter {
+            graph,
+            publisher,
+            published_layers: BTreeSet::new(),
+            generation: 0,
+        }
+    }
+
+    /// The live graph.
+    pub fn graph(&self) -> &SceneGraph {
+        &self.graph
+    }
+
+    /// The live graph, for mutations; readers see them at the next publish.
+    pub fn graph_mut(&mut self) -> &mut SceneGraph {
+        &mut self.graph
+    }
+
+    /// The transport publisher (waiting, connection updates).
+    pub fn publisher(&self) -> &SegmentPublisher {
+        &self.publisher
+    }
+
+    /// The generation of the last published snapshot (0 before the first).
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Publishes every changed layer and then the manifest of the new cut.
+    ///
+    /// # Errors
+    /// [`PublishError::SharedMemoryFull`] before anything is written when `/dev/shm`
+    /// lacks room, and the other transport errors. On error the previous snapshot stays
+    /// the current one for readers.
+    pub fn publish(&mut self) -> Result<PublishReport, PublishError> {
+        let mut report = PublishReport::default();
+        let mut entries = Vec::new();
+        let layers: Vec<_> = self.graph.layers().collect();
+        for layer in &layers {
+            let generation = self.graph.layer_generation(*layer).expect("listed layer");
+            if self.publisher.layer_generation(layer.0) != Some(generation) {
+                let segment = self.graph.layer_segment(*layer);
+                let len = segment.archived_len();
+                self.publisher
+                    .try_publish_layer(layer.0, generation, len, |buf| {
+                        segment.archive_into(buf).map(|_| ())
+                    })?;
+                report.layers_sent += 1;
+                report.bytes_sent += len;
+            } else {
+                report.layers_unchanged += 1;
+            }
+            entries.push(ManifestEntry {
+                layer_id: layer.0,
+                generation,
+            });
+        }
+        let live: BTreeSet<u32> = layers.iter().map(|l| l.0).collect();
+        for gone in self.published_layers.difference(&live) {
+            self.publisher.retire_layer(*gone);
+        }
+        self.published_layers = live;
+        let generation = self.generation + 1;
+        let mut manifest = self.graph.manifest(generation);
+        manifest.published_unix_ns = unix_ns();
+        let len = manifest.archived_len();
+        self.publisher
+            .try_publish_manifest(generation, &entries, len, |buf| {
+                manifest.archive_into(buf).map(|_| ())
+            })?;
+        self.generation = generation;
+        report.generation = generation;
+        report.bytes_sent += len;
+        Ok(report)
+    }
+}
+
+/// Nanoseconds since the Unix epoch (0 if the clock is before it).
+pub fn unix_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
+}
