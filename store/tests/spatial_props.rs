@@ -202,7 +202,7 @@ fn brute_visible<V: SceneView>(v: &V, root: NodeId, cone: &ConeView) -> Vec<Node
         .into_iter()
         .filter(|&id| {
             let n = v.node(id).expect("listed");
-            v.points(n).iter().any(|p| cone.contains(p))
+            v.points(n).iter().any(|p| cone.contains(p).unwrap())
         })
         .collect();
     out.sort_unstable();

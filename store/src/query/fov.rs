@@ -76,23 +76,6 @@ impl ConeView {
     }
 }
 
-impl ConeView {
-    /// Whether `p` is inside this view (false for an invalid view: see [`visible`]'s
-    /// errors). The predicate behind [`visible`], for baselines; it checks the view on
-    /// every call, so prefer [`visible`] for many points.
-    ///
-    /// # Examples
-    /// ```
-    /// # use ygg_store::query::ConeView;
-    /// let cone = ConeView { eye: [0.0; 3], dir: [0.0, 1.0, 0.0], half_angle: 0.3, range: 2.0 };
-    /// assert!(cone.contains(&[0.0, 1.5, 0.0]));
-    /// assert!(!cone.contains(&[1.0, 0.5, 0.0]));
-    /// ```
-    pub fn contains(&self, p: &Point) -> bool {
-        self.checked().is_ok_and(|c| c.contains(p))
-    }
-}
-
 impl Cone {
     /// Whether `p` is inside the cone (the one test every path uses).
     fn contains(&self, p: &Point) -> bool {

@@ -48,19 +48,6 @@ pub(crate) fn check_point(c: &Point) -> Result<(), SpatialQueryError> {
     }
 }
 
-/// Whether `p` is within `r` of `c`: `distance_squared(p, c).sqrt() <= r` (false for a
-/// negative or NaN `r`). The predicate behind [`nodes_within_radius`], for baselines.
-///
-/// # Examples
-/// ```
-/// # use ygg_store::query::within_radius;
-/// assert!(within_radius(&[3.0, 4.0, 0.0], &[0.0; 3], 5.0));
-/// assert!(!within_radius(&[3.0, 4.0, 0.0], &[0.0; 3], 4.999));
-/// ```
-pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
-    distance_squared(p, c).sqrt() <= r
-}
-
 /// The largest squared distance `d2` with `d2.sqrt() <= r`, so that [`within_radius`]
 /// is exactly "`distance_squared <= radius_bound(r)`" (`sqrt` is monotone).
 pub(crate) fn radius_bound(r: f32) -> f32 {
