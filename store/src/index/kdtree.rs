@@ -289,7 +289,7 @@ pub(crate) fn check_tree(tree: &ArchivedKdTree, items: usize) -> Result<(), Stri
     let stem_levels = (l.max_stem_level.to_native() + 1) as u32;
     let stems = l.stems.get();
     let bytes = l.leaves.leaf_bytes.get();
-    let misaligned = |len: usize, ptr: usize| len > 0 && ptr % 128 != 0;
+    let misaligned = |len: usize, ptr: usize| len > 0 && !ptr.is_multiple_of(128);
     if stems.len() < (1usize << stem_levels) - usize::from(stem_levels == 0)
         || misaligned(stems.len(), stems.as_ptr() as usize)
         || misaligned(bytes.len(), bytes.as_ptr() as usize)

@@ -90,11 +90,11 @@ impl Leaf {
     #[inline]
     fn distances(&self, c: &Point) -> [f32; LEAF_CAP] {
         let mut d = [0.0f32; LEAF_CAP];
-        for i in 0..LEAF_CAP {
+        for (i, di) in d.iter_mut().enumerate() {
             let dx = self.xs[i] - c[0];
             let dy = self.ys[i] - c[1];
             let dz = self.zs[i] - c[2];
-            d[i] = dx * dx + dy * dy + dz * dz;
+            *di = dx * dx + dy * dy + dz * dz;
         }
         d
     }
@@ -209,8 +209,10 @@ impl LiveKdTree {
 
     /// A balanced tree over `entries`.
     pub(crate) fn from_entries(mut entries: Vec<Entry>) -> Self {
-        let mut t = LiveKdTree::default();
-        t.len = entries.len();
+        let mut t = LiveKdTree {
+            len: entries.len(),
+            ..LiveKdTree::default()
+        };
         let leaves = entries.len().div_ceil(LEAF_CAP);
         t.leaves.reserve_exact(leaves);
         t.inners.reserve_exact(leaves);
@@ -507,15 +509,15 @@ impl LiveKdTree {
                 }
                 child = a;
             }
-            if self.leaves[head as usize].len == 0 {
-                if let Some(parent) = path.pop() {
-                    // Unlink the empty leaf: its sibling takes the parent's place.
-                    let n = self.inners[parent as usize];
-                    let sibling = if n.left == r { n.right } else { n.left };
-                    self.replace_child(path.last().copied(), parent, sibling);
-                    self.free_leaf(head);
-                    self.free_inners.push(parent);
-                }
+            if self.leaves[head as usize].len == 0
+                && let Some(parent) = path.pop()
+            {
+                // Unlink the empty leaf: its sibling takes the parent's place.
+                let n = self.inners[parent as usize];
+                let sibling = if n.left == r { n.right } else { n.left };
+                self.replace_child(path.last().copied(), parent, sibling);
+                self.free_leaf(head);
+                self.free_inners.push(parent);
             }
             self.rebalance(&path);
         }
@@ -692,10 +694,8 @@ impl LiveKdTree {
                         if (0..3).any(|a| p[a] < lo[a] || p[a] >= hi[a]) {
                             return Err(format!("entry {p:?} outside its cell"));
                         }
-                        if leaf.next != NONE || l != head {
-                            if Some(p) != first {
-                                return Err("chained leaf holds distinct points".into());
-                            }
+                        if (leaf.next != NONE || l != head) && Some(p) != first {
+                            return Err("chained leaf holds distinct points".into());
                         }
                     }
                     n += leaf.len;

@@ -4,13 +4,17 @@
 //! [`crate::index::build_layer_index`]).
 //!
 //! # Semantics
-//! - A node's **distance** to `c` is the smallest `distance_squared(p, c).sqrt()` (in
-//!   `f32`) over its points `p`; nodes without points are never returned.
-//! - A node is **within** `r` of `c` when its distance is `<= r`.
-//! - Ranked results ascend by distance; equal distances go to the smaller [`NodeId`].
+//! - A node's squared distance to `c` is the smallest [`distance_squared`]`(p, c)` over
+//!   its points `p` (in `f32`); its **distance** is the square root of that. Nodes
+//!   without points are never returned.
+//! - A node is **within** `r` of `c` when it has a point `p` with
+//!   [`within_radius`]`(p, c, r)`, i.e. `distance_squared(p, c).sqrt() <= r`.
+//! - Ranked results ascend by squared distance; nodes at exactly the same squared
+//!   distance go to the smaller [`NodeId`].
 //!
 //! Indexed and scanning paths compute distances with the same expression
-//! ([`crate::distance_squared`]), so they agree bit for bit.
+//! ([`crate::distance_squared`]), so they agree bit for bit; a brute-force baseline built
+//! on these definitions gets the same answers.
 
 use crate::index::SpatialIndex;
 use crate::{NodeId, Point, SceneView, Scope, distance_squared};
@@ -44,7 +48,7 @@ pub(crate) fn check_point(c: &Point) -> Result<(), SpatialQueryError> {
     }
 }
 
-/// The largest squared distance `d2` with `d2.sqrt() <= r`, so that "distance `<= r`"
+/// The largest squared distance `d2` with `d2.sqrt() <= r`, so that [`within_radius`]
 /// is exactly "`distance_squared <= radius_bound(r)`" (`sqrt` is monotone).
 pub(crate) fn radius_bound(r: f32) -> f32 {
     let mut x = r * r;
@@ -60,7 +64,7 @@ pub(crate) fn radius_bound(r: f32) -> f32 {
     x
 }
 
-/// The best `m` nodes seen so far, ascending by `(distance, id)`.
+/// The best `m` nodes seen so far, ascending by `(squared distance, id)`.
 pub(crate) struct TopNodes {
     m: usize,
     best: Vec<(f32, NodeId)>,
@@ -74,26 +78,30 @@ impl TopNodes {
         }
     }
 
-    pub(crate) fn offer(&mut self, dist: f32, id: NodeId) {
-        let key = |e: &(f32, NodeId)| (e.0, e.1);
+    pub(crate) fn offer(&mut self, d2: f32, id: NodeId) {
         let less =
-            |a: (f32, NodeId), b: (f32, NodeId)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
-        if self.best.len() == self.m && !less((dist, id), key(&self.best[self.m - 1])) {
+            |a: &(f32, NodeId), b: &(f32, NodeId)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
+        let e = (d2, id);
+        if self.best.len() == self.m && !less(&e, &self.best[self.m - 1]) {
             return;
         }
-        let at = self.best.partition_point(|e| less(key(e), (dist, id)));
-        self.best.insert(at, (dist, id));
+        let at = self.best.partition_point(|x| less(x, &e));
+        self.best.insert(at, e);
         self.best.truncate(self.m);
     }
 
-    /// Whether nothing at distance `>= min_dist` can still enter (strictly farther than
-    /// the current `m`-th node).
-    pub(crate) fn prunes(&self, min_dist: f32) -> bool {
-        self.m == 0 || (self.best.len() == self.m && min_dist > self.best[self.m - 1].0)
+    /// Whether nothing at squared distance `>= min_d2` can still enter (it would be
+    /// strictly farther than the current `m`-th node).
+    pub(crate) fn prunes(&self, min_d2: f32) -> bool {
+        self.m == 0 || (self.best.len() == self.m && min_d2 > self.best[self.m - 1].0)
     }
 
+    /// `(node, distance)` pairs, ascending.
     pub(crate) fn into_vec(self) -> Vec<(NodeId, f32)> {
-        self.best.into_iter().map(|(d, id)| (id, d)).collect()
+        self.best
+            .into_iter()
+            .map(|(d2, id)| (id, d2.sqrt()))
+            .collect()
     }
 }
 
@@ -115,26 +123,25 @@ pub(crate) fn index_nearest<I: SpatialIndex>(index: &I, c: &Point, top: &mut Top
         index.nearest_points(c, k, &mut points);
         let complete = points.len() < k;
         let limit = match points.last() {
-            Some(&(d2, _)) if !complete => (d2 * (1.0 - index.nearest_slack())).sqrt(),
+            Some(&(d2, _)) if !complete => d2 * (1.0 - index.nearest_slack()),
             _ => f32::INFINITY,
         };
         found.clear();
         for &(d2, item) in &points {
-            let dist = d2.sqrt();
-            if !complete && dist >= limit {
+            if !complete && d2 >= limit {
                 break;
             }
-            if found.len() >= m && dist > found[m - 1].0 {
+            if found.len() >= m && d2 > found[m - 1].0 {
                 break;
             }
             if !found.iter().any(|f| f.1 == item) {
-                found.push((dist, item));
+                found.push((d2, item));
             }
         }
         if complete || found.len() >= m {
-            for &(dist, item) in &found {
+            for &(d2, item) in &found {
                 if let Some(id) = index.node_of(item) {
-                    top.offer(dist, id);
+                    top.offer(d2, id);
                 }
             }
             return;
@@ -152,13 +159,12 @@ fn index_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32, out: &mut Vec<No
     out.extend(items.into_iter().filter_map(|i| index.node_of(i)));
 }
 
-/// A node's distance to `c` (`None` without points).
-fn node_distance<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
+/// A node's squared distance to `c` (`None` without points).
+fn node_distance2<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
     view.points(n)
         .iter()
         .map(|p| distance_squared(p, c))
         .min_by(f32::total_cmp)
-        .map(f32::sqrt)
 }
 
 /// At most `m` nodes in `scope` closest to `c`, with their distances.
@@ -171,8 +177,8 @@ fn node_distance<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) ->
 ///   returns them all; 0 returns none).
 ///
 /// # Returns
-/// `(node, distance)` pairs, ascending by distance, ties to the smaller id (see the
-/// module docs for the exact semantics).
+/// `(node, distance)` pairs, ascending by distance; nodes at the same squared distance go
+/// to the smaller id (see the module docs for the exact semantics).
 ///
 /// # Errors
 /// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
@@ -216,13 +222,14 @@ pub fn nearest_nodes<V: SceneView>(
             continue;
         }
         for n in view.layer_nodes(layer) {
-            if let Some(b) = view.aabb(n)
-                && top.prunes(b.distance_squared_to(&c).sqrt())
+            if view
+                .aabb(n)
+                .is_some_and(|b| top.prunes(b.distance_squared_to(&c)))
             {
                 continue;
             }
-            if let Some(d) = node_distance(view, n, &c) {
-                top.offer(d, view.node_id(n));
+            if let Some(d2) = node_distance2(view, n, &c) {
+                top.offer(d2, view.node_id(n));
             }
         }
     }
@@ -307,7 +314,8 @@ pub fn nodes_within_radius<V: SceneView>(
 /// * `m` – how many nodes at most.
 ///
 /// # Returns
-/// `(node, distance)` pairs, ascending by distance, ties to the smaller id.
+/// `(node, distance)` pairs, ascending by distance; nodes at the same squared distance go
+/// to the smaller id.
 ///
 /// # Errors
 /// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
@@ -361,13 +369,14 @@ pub fn nearest_in_subtree<V: SceneView>(
             index_nearest(&index, &c, &mut top);
             continue;
         }
-        if let Some(b) = view.aabb(n)
-            && top.prunes(b.distance_squared_to(&c).sqrt())
+        if view
+            .aabb(n)
+            .is_some_and(|b| top.prunes(b.distance_squared_to(&c)))
         {
             continue;
         }
-        if let Some(d) = node_distance(view, n, &c) {
-            top.offer(d, id);
+        if let Some(d2) = node_distance2(view, n, &c) {
+            top.offer(d2, id);
         }
         stack.extend(view.children(n).iter().filter_map(|&ch| view.node(ch)));
     }
@@ -474,7 +483,7 @@ mod tests {
         t.offer(1.0, NodeId(5));
         t.offer(1.0, NodeId(3));
         t.offer(1.0, NodeId(4));
-        t.offer(0.5, NodeId(9));
+        t.offer(0.25, NodeId(9));
         assert_eq!(t.into_vec(), vec![(NodeId(9), 0.5), (NodeId(3), 1.0)]);
     }
 }
