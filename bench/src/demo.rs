@@ -96,10 +96,11 @@ fn spawn(
     let out = child.stdout.take().ok_or("no stdout")?;
     std::thread::spawn(move || {
         for line in BufReader::new(out).lines().map_while(Result::ok) {
-            if let Ok(v) = serde_json::from_str::<Value>(&line) {
-                if tx.send((id, v)).is_err() {
-                    break;
-                }
+            let Ok(v) = serde_json::from_str::<Value>(&line) else {
+                continue;
+            };
+            if tx.send((id, v)).is_err() {
+                break;
             }
         }
     });

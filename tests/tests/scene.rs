@@ -35,13 +35,11 @@ fn attach(scene: &TestScene) -> SceneReader {
 fn snapshot_after(reader: &mut SceneReader, generation: u64) -> SceneSnapshot {
     let until = Instant::now() + STEP;
     loop {
-        if let Some(s) = reader
+        let next = reader
             .wait_next(Duration::from_millis(200))
-            .expect("receive")
-        {
-            if s.generation() >= generation {
-                return s;
-            }
+            .expect("receive");
+        if let Some(s) = next.filter(|s| s.generation() >= generation) {
+            return s;
         }
         assert!(
             Instant::now() < until,

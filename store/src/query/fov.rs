@@ -183,6 +183,17 @@ pub fn visible<V: SceneView>(
     Ok(out)
 }
 
+impl ConeView {
+    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
+    /// point.
+    ///
+    /// # Errors
+    /// As [`visible`], for an invalid cone.
+    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
+        Ok(self.checked()?.contains(p))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -268,16 +279,5 @@ mod tests {
             d[0] * u[1] - d[1] * u[0],
         ];
         (u, w)
-    }
-}
-
-impl ConeView {
-    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
-    /// point.
-    ///
-    /// # Errors
-    /// As [`visible`], for an invalid cone.
-    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
-        Ok(self.checked()?.contains(p))
     }
 }

@@ -449,6 +449,12 @@ pub fn within_index<I: SpatialIndex>(
     Ok(out)
 }
 
+/// Whether `p` lies within distance `r` of `c`: exactly the test
+/// [`nodes_within_radius`] applies to every point (false for an invalid radius).
+pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
+    r.is_finite() && r >= 0.0 && distance_squared(p, c) <= radius_bound(r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -486,10 +492,4 @@ mod tests {
         t.offer(0.25, NodeId(9));
         assert_eq!(t.into_vec(), vec![(NodeId(9), 0.5), (NodeId(3), 1.0)]);
     }
-}
-
-/// Whether `p` lies within distance `r` of `c`: exactly the test
-/// [`nodes_within_radius`] applies to every point (false for an invalid radius).
-pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
-    r.is_finite() && r >= 0.0 && distance_squared(p, c) <= radius_bound(r)
 }
