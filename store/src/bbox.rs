@@ -119,9 +119,9 @@ impl SceneGraph {
     /// Keeps boxes exact after `id`'s points changed from `old` to its current points.
     pub(crate) fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
         if self.any_box_at_or_above(id) {
-            let new = self.nodes[&id].points.clone();
-            let (removed, added) = crate::id::changed_points(old, &new);
-            self.update_boxes(id, removed, added);
+            let (removed, added) = crate::id::changed_points(old, &self.nodes[&id].points);
+            let (removed, added) = (removed.to_vec(), added.to_vec());
+            self.update_boxes(id, &removed, &added);
         }
     }
 
