@@ -74,13 +74,23 @@ fn build(n: usize) -> Scene {
     g.enable_layer_index(mesh).unwrap();
     g.enable_node_index(room).unwrap();
     let snapshot = g.to_snapshot();
-    let entries: Vec<(u32, Point)> = points.iter().enumerate().map(|(i, p)| (i as u32, *p)).collect();
+    let entries: Vec<(u32, Point)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (i as u32, *p))
+        .collect();
     let bare = KdTree::new_from_entries(&entries).unwrap();
     let queries: Vec<Point> = (0..1024).map(|_| random_point(&mut rng)).collect();
     let count_within = |r: f32| {
         let total: usize = queries[..64]
             .iter()
-            .map(|q| bare.query(q).within::<SquaredEuclidean<f32>>(r * r).unsorted().execute().len())
+            .map(|q| {
+                bare.query(q)
+                    .within::<SquaredEuclidean<f32>>(r * r)
+                    .unsorted()
+                    .execute()
+                    .len()
+            })
             .sum();
         total as f32 / 64.0
     };
@@ -96,14 +106,31 @@ fn build(n: usize) -> Scene {
     let r_large = fit(1000.0);
     // Cones from random eyes in random horizontal directions, their range fitted so that
     // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball).
+    let range = fit(15_000.0);
     let cones: Vec<ConeView> = queries
         .iter()
         .map(|&eye| {
             let a: f32 = rng.gen_range(0.0..std::f32::consts::TAU);
-            ConeView { eye, dir: [a.cos(), a.sin(), 0.0], half_angle: HALF_ANGLE, range: fit(15_000.0) }
+            ConeView {
+                eye,
+                dir: [a.cos(), a.sin(), 0.0],
+                half_angle: HALF_ANGLE,
+                range,
+            }
         })
         .collect();
-    Scene { g, mesh, room, points, snapshot, bare, queries, r_small, r_large, cones }
+    Scene {
+        g,
+        mesh,
+        room,
+        points,
+        snapshot,
+        bare,
+        queries,
+        r_small,
+        r_large,
+        cones,
+    }
 }
 
 /// The cone test and enclosing ball the store uses, for the bare and brute baselines.
@@ -127,14 +154,23 @@ impl ConeTest {
         let t = range / (2.0 * cos_half);
         let centre = [0, 1, 2].map(|a| (eye[a] + dir[a] * t) as f32);
         let r = t * 1.0001 + 1e-3;
-        ConeTest { eye, dir, cos_half, range2: range * range, centre, ball2: (r * r) as f32 }
+        ConeTest {
+            eye,
+            dir,
+            cos_half,
+            range2: range * range,
+            centre,
+            ball2: (r * r) as f32,
+        }
     }
 
     fn contains(&self, p: &Point) -> bool {
         let v = [0, 1, 2].map(|a| f64::from(p[a]) - self.eye[a]);
         let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
         d2 <= self.range2
-            && (d2 == 0.0 || v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2] >= self.cos_half * d2.sqrt())
+            && (d2 == 0.0
+                || v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2]
+                    >= self.cos_half * d2.sqrt())
     }
 }
 
@@ -190,7 +226,9 @@ fn bare_visible(bare: &KdTree, cone: &ConeView) -> Vec<u32> {
 
 fn brute_visible(points: &[Point], cone: &ConeView) -> Vec<u32> {
     let t = ConeTest::new(cone);
-    (0..points.len() as u32).filter(|&i| t.contains(&points[i as usize])).collect()
+    (0..points.len() as u32)
+        .filter(|&i| t.contains(&points[i as usize]))
+        .collect()
 }
 
 /// Per-call latency percentiles (p50, p99) in nanoseconds over `iters` calls.
@@ -262,87 +300,181 @@ fn report(n: usize, s: &mut Scene) {
     let iters = if n > 2_000_000 { 3_000 } else { 20_000 };
     let brute_iters = (2_000_000_000 / n.max(1)).clamp(20, 2_000);
     let mut rows = Vec::new();
-    let mut row = |case: &str, (p50, p99): (f64, f64)| rows.push(Row { case: case.to_owned(), p50, p99 });
+    let mut row = |case: &str, (p50, p99): (f64, f64)| {
+        rows.push(Row {
+            case: case.to_owned(),
+            p50,
+            p99,
+        })
+    };
     let (g, bare, points) = (&s.g, &s.bare, &s.points);
     let k1 = NonZeroUsize::new(1).unwrap();
     let k10 = NonZeroUsize::new(10).unwrap();
     for (m, k) in [(1, k1), (10, k10)] {
-        row(&format!("nearest m={m} / bare kiddo"), percentiles(iters, |i| {
-            timed(|| {
-                if m == 1 {
-                    black_box(bare.query(&q(i)).nearest_one::<SquaredEuclidean<f32>>().execute());
-                } else {
-                    black_box(bare.query(&q(i)).nearest_n::<SquaredEuclidean<f32>>(k).execute());
-                }
-            })
-        }));
-        row(&format!("nearest m={m} / archived"), percentiles(iters, |i| timed(|| {
-            black_box(nearest_nodes(&view, scope, q(i), m).unwrap());
-        })));
-        row(&format!("nearest m={m} / live"), percentiles(iters, |i| timed(|| {
-            black_box(nearest_nodes(g, scope, q(i), m).unwrap());
-        })));
-        row(&format!("nearest m={m} / brute force"), percentiles(brute_iters, |i| timed(|| {
-            black_box(brute_nearest(points, &q(i), m));
-        })));
+        row(
+            &format!("nearest m={m} / bare kiddo"),
+            percentiles(iters, |i| {
+                timed(|| {
+                    if m == 1 {
+                        black_box(
+                            bare.query(&q(i))
+                                .nearest_one::<SquaredEuclidean<f32>>()
+                                .execute(),
+                        );
+                    } else {
+                        black_box(
+                            bare.query(&q(i))
+                                .nearest_n::<SquaredEuclidean<f32>>(k)
+                                .execute(),
+                        );
+                    }
+                })
+            }),
+        );
+        row(
+            &format!("nearest m={m} / archived"),
+            percentiles(iters, |i| {
+                timed(|| {
+                    black_box(nearest_nodes(&view, scope, q(i), m).unwrap());
+                })
+            }),
+        );
+        row(
+            &format!("nearest m={m} / live"),
+            percentiles(iters, |i| {
+                timed(|| {
+                    black_box(nearest_nodes(g, scope, q(i), m).unwrap());
+                })
+            }),
+        );
+        row(
+            &format!("nearest m={m} / brute force"),
+            percentiles(brute_iters, |i| {
+                timed(|| {
+                    black_box(brute_nearest(points, &q(i), m));
+                })
+            }),
+        );
     }
     for (name, r) in [("radius small", s.r_small), ("radius large", s.r_large)] {
-        row(&format!("{name} / bare kiddo"), percentiles(iters / 4, |i| timed(|| {
-            black_box(bare_within(bare, &q(i), r));
-        })));
-        row(&format!("{name} / archived"), percentiles(iters / 4, |i| timed(|| {
-            black_box(nodes_within_radius(&view, scope, q(i), r).unwrap());
-        })));
-        row(&format!("{name} / live"), percentiles(iters / 4, |i| timed(|| {
-            black_box(nodes_within_radius(g, scope, q(i), r).unwrap());
-        })));
-        row(&format!("{name} / brute force"), percentiles(brute_iters, |i| timed(|| {
-            black_box(brute_within(points, &q(i), r));
-        })));
+        row(
+            &format!("{name} / bare kiddo"),
+            percentiles(iters / 4, |i| {
+                timed(|| {
+                    black_box(bare_within(bare, &q(i), r));
+                })
+            }),
+        );
+        row(
+            &format!("{name} / archived"),
+            percentiles(iters / 4, |i| {
+                timed(|| {
+                    black_box(nodes_within_radius(&view, scope, q(i), r).unwrap());
+                })
+            }),
+        );
+        row(
+            &format!("{name} / live"),
+            percentiles(iters / 4, |i| {
+                timed(|| {
+                    black_box(nodes_within_radius(g, scope, q(i), r).unwrap());
+                })
+            }),
+        );
+        row(
+            &format!("{name} / brute force"),
+            percentiles(brute_iters, |i| {
+                timed(|| {
+                    black_box(brute_within(points, &q(i), r));
+                })
+            }),
+        );
     }
     let cone = |i: usize| s.cones[i % s.cones.len()];
-    row("visible / bare kiddo", percentiles(iters / 4, |i| timed(|| {
-        black_box(bare_visible(bare, &cone(i)));
-    })));
-    row("visible / archived", percentiles(iters / 4, |i| timed(|| {
-        black_box(visible(&view, s.room, &cone(i)).unwrap());
-    })));
-    row("visible / live", percentiles(iters / 4, |i| timed(|| {
-        black_box(visible(g, s.room, &cone(i)).unwrap());
-    })));
-    row("visible / brute force", percentiles(brute_iters, |i| timed(|| {
-        black_box(brute_visible(points, &cone(i)));
-    })));
+    row(
+        "visible / bare kiddo",
+        percentiles(iters / 4, |i| {
+            timed(|| {
+                black_box(bare_visible(bare, &cone(i)));
+            })
+        }),
+    );
+    row(
+        "visible / archived",
+        percentiles(iters / 4, |i| {
+            timed(|| {
+                black_box(visible(&view, s.room, &cone(i)).unwrap());
+            })
+        }),
+    );
+    row(
+        "visible / live",
+        percentiles(iters / 4, |i| {
+            timed(|| {
+                black_box(visible(g, s.room, &cone(i)).unwrap());
+            })
+        }),
+    );
+    row(
+        "visible / brute force",
+        percentiles(brute_iters, |i| {
+            timed(|| {
+                black_box(brute_visible(points, &cone(i)));
+            })
+        }),
+    );
     let live_bytes = g.layer_index(s.mesh).unwrap().memory_bytes();
     let archived_bytes = view.layer_index(s.mesh).unwrap().memory_bytes();
     drop(view);
     let mut rng = ChaCha8Rng::seed_from_u64(99);
     let update_iters = iters.min(20_000);
-    for (label, layer_index, node_index) in [("layer + node index", true, true), ("layer index", true, false), ("no index", false, false)] {
+    for (label, layer_index, node_index) in [
+        ("layer + node index", true, true),
+        ("layer index", true, false),
+        ("no index", false, false),
+    ] {
         if !node_index {
             s.g.disable_node_index(s.room).unwrap();
         }
         if !layer_index {
             s.g.disable_layer_index(s.mesh).unwrap();
         }
-        for (name, op) in [("insert", Update::Insert), ("move", Update::Move), ("remove", Update::Remove)] {
+        for (name, op) in [
+            ("insert", Update::Insert),
+            ("move", Update::Move),
+            ("remove", Update::Remove),
+        ] {
             let (p50, p99) = percentiles(update_iters, |i| update(s, op, i, &mut rng));
-            rows.push(Row { case: format!("update {name} / {label}"), p50, p99 });
+            rows.push(Row {
+                case: format!("update {name} / {label}"),
+                p50,
+                p99,
+            });
         }
     }
     s.g.enable_layer_index(s.mesh).unwrap();
     s.g.enable_node_index(s.room).unwrap();
 
-    println!("\n### {n} points (r_small {:.2} m, r_large {:.2} m, cone range {:.2} m)\n", s.r_small, s.r_large, s.cones[0].range);
+    println!(
+        "\n### {n} points (r_small {:.2} m, r_large {:.2} m, cone range {:.2} m)\n",
+        s.r_small, s.r_large, s.cones[0].range
+    );
     println!("| case | p50 | p99 | p50 / bare kiddo |");
     println!("|---|---|---|---|");
     let floor = |case: &str| {
         let family = case.split(" / ").next().unwrap();
-        rows.iter().find(|r| r.case == format!("{family} / bare kiddo")).map(|r| r.p50)
+        rows.iter()
+            .find(|r| r.case == format!("{family} / bare kiddo"))
+            .map(|r| r.p50)
     };
     for r in &rows {
         let ratio = floor(&r.case).map_or(String::new(), |f| format!("{:.2}×", r.p50 / f));
-        println!("| {} | {} | {} | {ratio} |", r.case, fmt_ns(r.p50), fmt_ns(r.p99));
+        println!(
+            "| {} | {} | {} | {ratio} |",
+            r.case,
+            fmt_ns(r.p50),
+            fmt_ns(r.p99)
+        );
     }
     println!(
         "\nindex bytes per point: live {:.2}, archived {:.2} (12 of them are the point's coordinates)\n",
@@ -357,7 +489,11 @@ fn sizes() -> Vec<usize> {
     std::env::var("YGG_SPATIAL_SIZES")
         .unwrap_or_else(|_| "10000,100000".into())
         .split(',')
-        .map(|s| s.trim().parse().expect("YGG_SPATIAL_SIZES: comma-separated point counts"))
+        .map(|s| {
+            s.trim()
+                .parse()
+                .expect("YGG_SPATIAL_SIZES: comma-separated point counts")
+        })
         .collect()
 }
 
@@ -373,7 +509,10 @@ fn spatial(c: &mut Criterion) {
         let k10 = NonZeroUsize::new(10).unwrap();
         let mut group = c.benchmark_group(format!("spatial/{n}"));
         group.throughput(Throughput::Elements(1));
-        group.sample_size(30).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+        group
+            .sample_size(30)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(1));
         let mut i = 0usize;
         let mut next = || {
             i = i.wrapping_add(1);
@@ -381,7 +520,12 @@ fn spatial(c: &mut Criterion) {
         };
         let q = |i: usize| s.queries[i % s.queries.len()];
         group.bench_function(BenchmarkId::new("nearest_m1", "bare_kiddo"), |b| {
-            b.iter(|| s.bare.query(&q(next())).nearest_one::<SquaredEuclidean<f32>>().execute())
+            b.iter(|| {
+                s.bare
+                    .query(&q(next()))
+                    .nearest_one::<SquaredEuclidean<f32>>()
+                    .execute()
+            })
         });
         group.bench_function(BenchmarkId::new("nearest_m1", "archived"), |b| {
             b.iter(|| nearest_nodes(&view, scope, q(next()), 1).unwrap())
@@ -390,7 +534,12 @@ fn spatial(c: &mut Criterion) {
             b.iter(|| nearest_nodes(&s.g, scope, q(next()), 1).unwrap())
         });
         group.bench_function(BenchmarkId::new("nearest_m10", "bare_kiddo"), |b| {
-            b.iter(|| s.bare.query(&q(next())).nearest_n::<SquaredEuclidean<f32>>(k10).execute())
+            b.iter(|| {
+                s.bare
+                    .query(&q(next()))
+                    .nearest_n::<SquaredEuclidean<f32>>(k10)
+                    .execute()
+            })
         });
         group.bench_function(BenchmarkId::new("nearest_m10", "archived"), |b| {
             b.iter(|| nearest_nodes(&view, scope, q(next()), 10).unwrap())
@@ -422,11 +571,22 @@ fn spatial(c: &mut Criterion) {
         group.finish();
         drop(view);
         let mut group = c.benchmark_group(format!("spatial_update/{n}"));
-        group.sample_size(30).warm_up_time(Duration::from_millis(300)).measurement_time(Duration::from_secs(1));
+        group
+            .sample_size(30)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(1));
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        for (name, op) in [("insert", Update::Insert), ("move", Update::Move), ("remove", Update::Remove)] {
+        for (name, op) in [
+            ("insert", Update::Insert),
+            ("move", Update::Move),
+            ("remove", Update::Remove),
+        ] {
             group.bench_function(BenchmarkId::new(name, "layer_and_node_index"), |b| {
-                b.iter_custom(|iters| (0..iters).map(|k| update(&mut s, op, k as usize, &mut rng)).sum())
+                b.iter_custom(|iters| {
+                    (0..iters)
+                        .map(|k| update(&mut s, op, k as usize, &mut rng))
+                        .sum()
+                })
             });
         }
         group.finish();
@@ -441,8 +601,14 @@ fn check_answers(s: &Scene) {
     for i in 0..16 {
         let c = s.queries[i];
         for m in [1, 10] {
-            let want: Vec<NodeId> = brute_nearest(&s.points, &c, m).into_iter().map(|e| id(e.1)).collect();
-            for got in [nearest_nodes(&view, scope, c, m).unwrap(), nearest_nodes(&s.g, scope, c, m).unwrap()] {
+            let want: Vec<NodeId> = brute_nearest(&s.points, &c, m)
+                .into_iter()
+                .map(|e| id(e.1))
+                .collect();
+            for got in [
+                nearest_nodes(&view, scope, c, m).unwrap(),
+                nearest_nodes(&s.g, scope, c, m).unwrap(),
+            ] {
                 assert_eq!(got.into_iter().map(|e| e.0).collect::<Vec<_>>(), want);
             }
         }
@@ -452,8 +618,17 @@ fn check_answers(s: &Scene) {
             assert_eq!(nodes_within_radius(&s.g, scope, c, r).unwrap(), want);
         }
         let cone = s.cones[i];
-        let want: Vec<NodeId> = brute_visible(&s.points, &cone).into_iter().map(id).collect();
-        assert_eq!(bare_visible(&s.bare, &cone).into_iter().map(id).collect::<Vec<_>>(), want);
+        let want: Vec<NodeId> = brute_visible(&s.points, &cone)
+            .into_iter()
+            .map(id)
+            .collect();
+        assert_eq!(
+            bare_visible(&s.bare, &cone)
+                .into_iter()
+                .map(id)
+                .collect::<Vec<_>>(),
+            want
+        );
         assert_eq!(visible(&view, s.room, &cone).unwrap(), want);
         assert_eq!(visible(&s.g, s.room, &cone).unwrap(), want);
     }

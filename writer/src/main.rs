@@ -221,7 +221,11 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
             let view = file.view();
             let all: Vec<ygg_store::NodeId> = view
                 .layers()
-                .flat_map(|l| view.layer_nodes(l).map(|n| view.node_id(n)).collect::<Vec<_>>())
+                .flat_map(|l| {
+                    view.layer_nodes(l)
+                        .map(|n| view.node_id(n))
+                        .collect::<Vec<_>>()
+                })
                 .collect();
             ygg_store::query::subgraph(&view, &all)
         }
@@ -234,7 +238,9 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let loaded = t.elapsed();
-    let publisher = WriterBuilder::new(&args.scene).max_readers(args.max_readers).create()?;
+    let publisher = WriterBuilder::new(&args.scene)
+        .max_readers(args.max_readers)
+        .create()?;
     let mut writer = SceneWriter::with_publisher(publisher, graph);
     let mut replay = SlamReplay::new(writer.graph(), 7);
     let first = writer.publish()?;
@@ -243,13 +249,20 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         serde_json::json!({"event": "ready", "scene": args.scene, "nodes": writer.graph().node_count(),
             "load_ms": loaded.as_secs_f64() * 1e3, "first_publish_bytes": first.bytes_sent})
     );
-    let period = if args.rate > 0.0 { Duration::from_secs_f64(1.0 / args.rate) } else { Duration::from_millis(200) };
+    let period = if args.rate > 0.0 {
+        Duration::from_secs_f64(1.0 / args.rate)
+    } else {
+        Duration::from_millis(200)
+    };
     let start = Instant::now();
     let mut next = start + period;
     let (mut ticks, mut update_ns, mut publish_ns, mut bytes) = (0u64, 0u128, 0u128, 0usize);
     let mut last_report = start;
     let stop_reason = loop {
-        if args.seconds.is_some_and(|s| start.elapsed().as_secs_f64() >= s) {
+        if args
+            .seconds
+            .is_some_and(|s| start.elapsed().as_secs_f64() >= s)
+        {
             break "time limit".to_owned();
         }
         if args.rate > 0.0 {
@@ -278,7 +291,13 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let secs = start.elapsed().as_secs_f64();
-    let per = |ns: u128| if ticks == 0 { 0.0 } else { ns as f64 / ticks as f64 / 1e3 };
+    let per = |ns: u128| {
+        if ticks == 0 {
+            0.0
+        } else {
+            ns as f64 / ticks as f64 / 1e3
+        }
+    };
     println!(
         "{}",
         serde_json::json!({"event": "summary", "stop": stop_reason, "ticks": ticks, "seconds": secs,
@@ -293,6 +312,10 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
 fn rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/statm")
         .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|p| p.parse::<f64>().ok()))
+        .and_then(|s| {
+            s.split_whitespace()
+                .nth(1)
+                .and_then(|p| p.parse::<f64>().ok())
+        })
         .map_or(0.0, |pages| pages * 4096.0 / 1e6)
 }

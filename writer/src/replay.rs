@@ -66,7 +66,11 @@ impl SlamReplay {
             .unwrap_or_default();
         let mut objects: Vec<NodeId> = layout::object_mesh_layers(g)
             .into_iter()
-            .flat_map(|(l, _)| g.layer_nodes(l).filter_map(|m| g.parent(m)).collect::<Vec<_>>())
+            .flat_map(|(l, _)| {
+                g.layer_nodes(l)
+                    .filter_map(|m| g.parent(m))
+                    .collect::<Vec<_>>()
+            })
             .collect();
         objects.sort_unstable();
         objects.dedup();
@@ -104,11 +108,20 @@ impl SlamReplay {
         }
         if self.tick % MOVE_EVERY == 0 && !self.objects.is_empty() {
             let o = self.objects[self.rng.gen_range(0..self.objects.len())];
-            let d = [self.rng.gen_range(-0.02..0.02), self.rng.gen_range(-0.02..0.02), 0.0];
+            let d = [
+                self.rng.gen_range(-0.02..0.02),
+                self.rng.gen_range(-0.02..0.02),
+                0.0,
+            ];
             for m in children(&*g, o) {
                 let moved: Vec<Point> = g
                     .node(m)
-                    .map(|n| g.points(n).iter().map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]]).collect())
+                    .map(|n| {
+                        g.points(n)
+                            .iter()
+                            .map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+                            .collect()
+                    })
                     .unwrap_or_default();
                 g.set_geometry(m, moved)?;
             }
@@ -124,27 +137,46 @@ impl SlamReplay {
     }
 
     fn append_pose(&mut self, g: &mut SceneGraph, agents: LayerId) -> EditResult {
-        let to = [self.waypoint[0] - self.position[0], self.waypoint[1] - self.position[1]];
+        let to = [
+            self.waypoint[0] - self.position[0],
+            self.waypoint[1] - self.position[1],
+        ];
         let dist = (to[0] * to[0] + to[1] * to[1]).sqrt();
         if dist < STEP {
-            if let Some(&(_, b)) = self.rooms.get(self.rng.gen_range(0..self.rooms.len().max(1))) {
-                self.waypoint = [self.rng.gen_range(b[0]..=b[3]), self.rng.gen_range(b[1]..=b[4]), 1.0];
+            if let Some(&(_, b)) = self
+                .rooms
+                .get(self.rng.gen_range(0..self.rooms.len().max(1)))
+            {
+                self.waypoint = [
+                    self.rng.gen_range(b[0]..=b[3]),
+                    self.rng.gen_range(b[1]..=b[4]),
+                    1.0,
+                ];
             }
         } else {
-            self.position = [self.position[0] + to[0] / dist * STEP, self.position[1] + to[1] / dist * STEP, 1.0];
+            self.position = [
+                self.position[0] + to[0] / dist * STEP,
+                self.position[1] + to[1] / dist * STEP,
+                1.0,
+            ];
         }
         let id = NodeId(NodeSymbol::new(b'a', self.next_pose).0);
         self.next_pose += 1;
         g.add_node(id, agents)?;
         g.set_geometry(id, vec![self.position])?;
-        g.set_feature(id, "timestamp_ns", FeatureValue::Int((self.tick * 33_333_333) as i64))?;
+        g.set_feature(
+            id,
+            "timestamp_ns",
+            FeatureValue::Int((self.tick * 33_333_333) as i64),
+        )?;
         if let Some(prev) = self.last_pose {
             if g.node(prev).is_some() {
                 g.add_edge(prev, id, "odometry")?;
             }
         }
         if let Some(places) = self.places {
-            let near = nearest_nodes(&*g, Scope::Layer(places), self.position, 1).unwrap_or_default();
+            let near =
+                nearest_nodes(&*g, Scope::Layer(places), self.position, 1).unwrap_or_default();
             if let Some(&(place, _)) = near.first() {
                 // Nesting needs a places -> agents layer edge; scenes without one skip it.
                 let _ = g.nest(place, id);
@@ -164,10 +196,17 @@ impl SlamReplay {
             .layer_by_name(&format!("room:{}/unclaimed-mesh", room.0))
             .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
         let Some(target) = target else { return Ok(0) };
-        let mut points = g.node(target).map(|n| g.points(n).to_vec()).unwrap_or_default();
+        let mut points = g
+            .node(target)
+            .map(|n| g.points(n).to_vec())
+            .unwrap_or_default();
         let n = 64;
         for _ in 0..n {
-            points.push([self.rng.gen_range(b[0]..=b[3]), self.rng.gen_range(b[1]..=b[4]), self.rng.gen_range(0.0..3.0)]);
+            points.push([
+                self.rng.gen_range(b[0]..=b[3]),
+                self.rng.gen_range(b[1]..=b[4]),
+                self.rng.gen_range(0.0..3.0),
+            ]);
         }
         g.set_geometry(target, points)?;
         Ok(n)
@@ -192,7 +231,11 @@ impl SlamReplay {
         let object = NodeId(NodeSymbol::new(b'O', self.next_object).0);
         let mesh_node = NodeId(0xF5 << 56 | self.next_object);
         self.next_object += 1;
-        let centre = [self.rng.gen_range(b[0]..=b[3]), self.rng.gen_range(b[1]..=b[4]), self.rng.gen_range(0.3..2.0)];
+        let centre = [
+            self.rng.gen_range(b[0]..=b[3]),
+            self.rng.gen_range(b[1]..=b[4]),
+            self.rng.gen_range(0.3..2.0),
+        ];
         let points: Vec<Point> = (0..48)
             .map(|_| [0, 1, 2].map(|a| centre[a] + self.rng.gen_range(-0.15f32..0.15)))
             .collect();

@@ -76,6 +76,17 @@ impl ConeView {
     }
 }
 
+impl ConeView {
+    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
+    /// point.
+    ///
+    /// # Errors
+    /// As [`visible`], for an invalid cone.
+    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
+        Ok(self.checked()?.contains(p))
+    }
+}
+
 impl Cone {
     /// Whether `p` is inside the cone (the one test every path uses).
     fn contains(&self, p: &Point) -> bool {
@@ -268,16 +279,5 @@ mod tests {
             d[0] * u[1] - d[1] * u[0],
         ];
         (u, w)
-    }
-}
-
-impl ConeView {
-    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
-    /// point.
-    ///
-    /// # Errors
-    /// As [`visible`], for an invalid cone.
-    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
-        Ok(self.checked()?.contains(p))
     }
 }
