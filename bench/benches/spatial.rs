@@ -106,6 +106,7 @@ fn build(n: usize) -> Scene {
     let r_large = fit(1000.0);
     // Cones from random eyes in random horizontal directions, their range fitted so that
     // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball).
+    let range = fit(15_000.0);
     let cones: Vec<ConeView> = queries
         .iter()
         .map(|&eye| {
@@ -114,7 +115,7 @@ fn build(n: usize) -> Scene {
                 eye,
                 dir: [a.cos(), a.sin(), 0.0],
                 half_angle: HALF_ANGLE,
-                range: fit(15_000.0),
+                range,
             }
         })
         .collect();

@@ -138,7 +138,7 @@ impl SpatialIndex for NoIndex {
         match *self {}
     }
 
-    fn nearest_points(&self, _c: &Point, _k: usize, _out: &mut Vec<(f32, u32)>) {
+    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, _c: &Point, _f: F) {
         match *self {}
     }
 

@@ -148,7 +148,7 @@ fn leaf_index(r: u32) -> usize {
 /// per-axis offsets from the query are at least `off` (a point in the cell), the result
 /// is at most that point's distance (rounding is monotone).
 #[inline]
-fn cell_distance_squared(off: &[f32; 3]) -> f32 {
+pub(crate) fn cell_distance_squared(off: &[f32; 3]) -> f32 {
     off[0] * off[0] + off[1] * off[1] + off[2] * off[2]
 }
 
@@ -166,39 +166,6 @@ fn partition(entries: &mut [Entry], pred: impl Fn(&Entry) -> bool) -> usize {
         }
     }
     i
-}
-
-/// The `k` best `(distance², item)` pairs seen so far, ascending.
-struct KBest<'a> {
-    k: usize,
-    out: &'a mut Vec<(f32, u32)>,
-}
-
-impl KBest<'_> {
-    #[inline]
-    fn bound(&self) -> f32 {
-        if self.out.len() < self.k {
-            f32::INFINITY
-        } else {
-            self.out[self.k - 1].0
-        }
-    }
-
-    #[inline]
-    fn full(&self) -> bool {
-        self.out.len() >= self.k
-    }
-
-    fn offer(&mut self, d: f32, item: u32) {
-        if self.full() && d >= self.bound() {
-            return;
-        }
-        let at = self.out.partition_point(|e| e.0 <= d);
-        if self.full() {
-            self.out.pop();
-        }
-        self.out.insert(at, (d, item));
-    }
 }
 
 impl LiveKdTree {
@@ -583,26 +550,36 @@ impl LiveKdTree {
 
     // ---- queries ------------------------------------------------------------------------
 
-    /// Appends the `k` entries closest to `c` to `out` as `(distance², item)`, ascending
-    /// (ties in any order). Every entry left out is at least as far as the last one.
-    pub fn nearest(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
-        out.clear();
-        if k == 0 || self.len == 0 {
-            return;
+    /// Branch-and-bound nearest search (see [`crate::index::SpatialIndex::nearest_visit`]):
+    /// calls `f(distance², item)` for entries at most the current bound away, nearer
+    /// cells first, and skips cells strictly farther than the bound `f` returns.
+    pub fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, mut f: F) {
+        if self.len > 0 {
+            let mut bound = f32::INFINITY;
+            self.nearest_in(self.root, c, [0.0; 3], &mut bound, &mut f);
         }
-        let mut best = KBest { k, out };
-        self.nearest_in(self.root, c, [0.0; 3], &mut best);
     }
 
-    fn nearest_in(&self, r: u32, c: &Point, off: [f32; 3], best: &mut KBest<'_>) {
+    fn nearest_in<F: FnMut(f32, u32) -> f32>(
+        &self,
+        r: u32,
+        c: &Point,
+        off: [f32; 3],
+        bound: &mut f32,
+        f: &mut F,
+    ) {
         if is_leaf(r) {
             let mut l = leaf_index(r) as u32;
             while l != NONE {
                 let leaf = &self.leaves[l as usize];
                 let d = leaf.distances(c);
-                for (i, &di) in d.iter().enumerate().take(leaf.len as usize) {
-                    if !best.full() || di < best.bound() {
-                        best.offer(di, leaf.items[i]);
+                let b = *bound;
+                // Slots past `len` may hold stale points: a false hit only costs the loop.
+                if d.iter().fold(false, |hit, &x| hit | (x <= b)) {
+                    for (i, &di) in d.iter().enumerate().take(leaf.len as usize) {
+                        if di <= *bound {
+                            *bound = f(di, leaf.items[i]);
+                        }
                     }
                 }
                 l = leaf.next;
@@ -617,11 +594,11 @@ impl LiveKdTree {
         } else {
             (n.right, n.left)
         };
-        self.nearest_in(near, c, off, best);
+        self.nearest_in(near, c, off, bound, f);
         let mut far_off = off;
         far_off[dim] = delta.abs();
-        if !best.full() || cell_distance_squared(&far_off) < best.bound() {
-            self.nearest_in(far, c, far_off, best);
+        if cell_distance_squared(&far_off) <= *bound {
+            self.nearest_in(far, c, far_off, bound, f);
         }
     }
 
@@ -777,7 +754,6 @@ mod tests {
     fn check_queries(t: &LiveKdTree, model: &[Entry], rng: &mut impl Rng) {
         t.check().unwrap();
         assert_eq!(t.len(), model.len());
-        let mut out = Vec::new();
         for _ in 0..20 {
             let c = [
                 rng.gen_range(-2.0..12.0),
@@ -785,16 +761,24 @@ mod tests {
                 rng.gen_range(-1.0..2.0),
             ];
             let k = rng.gen_range(1..12);
-            t.nearest(&c, k, &mut out);
-            let got: Vec<f32> = out.iter().map(|e| e.0).collect();
-            assert_eq!(got, brute_nearest(model, &c, k));
-            for &(d, item) in &out {
+            // The k smallest distances, through the visitor with a k-best bound.
+            let mut best: Vec<f32> = Vec::new();
+            t.nearest_visit(&c, |d, item| {
                 assert!(
                     model
                         .iter()
                         .any(|e| e.item == item && distance_squared(&e.p, &c) == d)
                 );
-            }
+                let at = best.partition_point(|&x| x <= d);
+                best.insert(at, d);
+                best.truncate(k);
+                if best.len() == k {
+                    best[k - 1]
+                } else {
+                    f32::INFINITY
+                }
+            });
+            assert_eq!(best, brute_nearest(model, &c, k));
             let r2 = rng.gen_range(0.0..9.0f32);
             let mut w = Vec::new();
             t.within(&c, r2, &mut |d, item, _| w.push((item, d.to_bits())));
@@ -844,10 +828,14 @@ mod tests {
         t.insert([1.0, 2.0, 4.0], 999);
         t.check().unwrap();
         assert_eq!(t.len(), 201);
-        let mut out = Vec::new();
-        t.nearest(&[1.0, 2.0, 3.0], 300, &mut out);
-        assert_eq!(out.len(), 201);
-        assert_eq!(out[200], (1.0, 999));
+        let mut seen = Vec::new();
+        t.nearest_visit(&[1.0, 2.0, 3.0], |d, item| {
+            seen.push((d, item));
+            f32::INFINITY
+        });
+        seen.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        assert_eq!(seen.len(), 201);
+        assert_eq!(seen[200], (1.0, 999));
         for i in 0..200 {
             assert!(t.remove([1.0, 2.0, 3.0], i));
             t.check().unwrap();
