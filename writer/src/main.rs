@@ -3,6 +3,8 @@
 //! `serve-test` is a temporary driver that publishes synthetic segments; the real `serve`
 //! (publishing a scene graph) replaces it once the store lands.
 
+mod import;
+
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -29,6 +31,9 @@ enum Command {
     /// Publishes every layer once, then on each tick changes one layer (round robin) and
     /// publishes a new manifest. Exits cleanly, removing its shared memory, on SIGINT/SIGTERM.
     ServeTest(ServeTest),
+    /// Import a Spark-DSG JSON file (.json or .json.gz) into a `.ygg` snapshot in one of
+    /// the paper's layouts, with a progress bar.
+    Import(import::ImportArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -68,6 +73,7 @@ fn main() -> ExitCode {
     let _ = ygg_reader::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
+        Command::Import(args) => import::run(&args).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
