@@ -1,5 +1,8 @@
 //! `ygg-reader`: command-line front end of the reader.
 
+mod inspect;
+mod query_cli;
+
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -30,6 +33,12 @@ enum Command {
     /// Run a demo consumer (planner, visibility, labels) on a live scene, printing JSON
     /// progress and a summary line.
     Role(roles::RoleArgs),
+    /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
+    /// or the paper's static table of the layouts of a Spark-DSG JSON file.
+    Inspect(inspect::InspectArgs),
+    /// Answer JSON-line object queries on a `.ygg` file or a live scene (one line out per
+    /// line in).
+    Query(query_cli::QueryArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -78,6 +87,12 @@ fn main() -> ExitCode {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
         Command::Role(args) => roles::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Inspect(args) => inspect::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Query(args) => query_cli::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
     };
     match result {
         Ok(code) => code,

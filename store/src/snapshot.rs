@@ -658,6 +658,15 @@ impl SnapshotFile {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Bytes of each segment: the manifest's, then every layer segment's in manifest
+    /// order (ascending layer id, as [`SceneView::layers`] lists them).
+    pub fn segment_sizes(&self) -> (usize, Vec<usize>) {
+        (
+            self.manifest.len(),
+            self.layers.iter().map(|r| r.len()).collect(),
+        )
+    }
 }
 
 /// Re-derives a layer segment from bytes that [`validate_layer`] accepted before.
