@@ -1,5 +1,6 @@
 //! `ygg-bench`: the Yggdrasil demo and benchmarks.
 
+mod ipc;
 mod ladder;
 
 use clap::{Parser, Subcommand};
@@ -26,6 +27,8 @@ enum Command {
     ArchiveSizes,
     /// The paper's ablation ladder on the office workload.
     Ladder(ladder::LadderArgs),
+    /// Multi-process publish-to-visible latency: shared memory vs a Unix socket.
+    Ipc(ipc::IpcArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -33,6 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Demo { objects } => demo(objects),
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
+        Command::Ipc(args) => ipc::run(&args),
     }
 }
 
