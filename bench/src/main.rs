@@ -1,6 +1,7 @@
 //! `ygg-bench`: the Yggdrasil demo and benchmarks.
 
 mod demo;
+mod ipc;
 mod ladder;
 
 use clap::{Parser, Subcommand};
@@ -22,6 +23,8 @@ enum Command {
     ArchiveSizes,
     /// The paper's ablation ladder on the office workload.
     Ladder(ladder::LadderArgs),
+    /// Multi-process publish-to-visible latency: shared memory vs a Unix socket.
+    Ipc(ipc::IpcArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -29,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Demo(args) => demo::run(&args),
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
+        Command::Ipc(args) => ipc::run(&args),
     }
 }
 
