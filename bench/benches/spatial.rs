@@ -105,8 +105,9 @@ fn build(n: usize) -> Scene {
     let r_small = fit(10.0);
     let r_large = fit(1000.0);
     // Cones from random eyes in random horizontal directions, their range fitted so that
-    // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball).
-    let range = fit(15_000.0);
+    // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball; small
+    // scenes see fewer).
+    let range = fit(15_000f32.min(n as f32 / 4.0));
     let cones: Vec<ConeView> = queries
         .iter()
         .map(|&eye| {
