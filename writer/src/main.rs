@@ -3,6 +3,8 @@
 //! `serve-test` is a temporary driver that publishes synthetic segments; the real `serve`
 //! (publishing a scene graph) replaces it once the store lands.
 
+mod import;
+
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -36,6 +38,9 @@ enum Command {
     /// `{"event":"summary",...}` line. Exits cleanly, removing its shared memory, on
     /// SIGINT/SIGTERM or after --seconds.
     Serve(Serve),
+    /// Import a Spark-DSG JSON file (.json or .json.gz) into a `.ygg` snapshot in one of
+    /// the paper's layouts, with a progress bar.
+    Import(import::ImportArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -102,6 +107,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
         Command::Serve(args) => serve(&args),
+        Command::Import(args) => import::run(&args).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -106,7 +106,7 @@ impl SlamReplay {
             self.append_pose(g, agents)?;
             report.poses = 1;
         }
-        if self.tick % MOVE_EVERY == 0 && !self.objects.is_empty() {
+        if self.tick.is_multiple_of(MOVE_EVERY) && !self.objects.is_empty() {
             let o = self.objects[self.rng.gen_range(0..self.objects.len())];
             let d = [
                 self.rng.gen_range(-0.02..0.02),
@@ -127,10 +127,10 @@ impl SlamReplay {
             }
             report.objects_moved = 1;
         }
-        if self.tick % MESH_EVERY == 0 {
+        if self.tick.is_multiple_of(MESH_EVERY) {
             report.mesh_points = self.grow_mesh(g)?;
         }
-        if self.tick % NEW_OBJECT_EVERY == 0 {
+        if self.tick.is_multiple_of(NEW_OBJECT_EVERY) {
             report.objects_added = self.add_object(g)?;
         }
         Ok(report)
@@ -169,10 +169,8 @@ impl SlamReplay {
             "timestamp_ns",
             FeatureValue::Int((self.tick * 33_333_333) as i64),
         )?;
-        if let Some(prev) = self.last_pose {
-            if g.node(prev).is_some() {
-                g.add_edge(prev, id, "odometry")?;
-            }
+        if let Some(prev) = self.last_pose.filter(|p| g.node(*p).is_some()) {
+            g.add_edge(prev, id, "odometry")?;
         }
         if let Some(places) = self.places {
             let near =

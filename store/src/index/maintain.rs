@@ -80,6 +80,7 @@ impl LiveIndexes {
 }
 
 fn apply(tree: &mut LiveKdTree, h: u32, old: &[Point], new: &[Point]) {
+    let (old, new) = crate::id::changed_points(old, new);
     for p in old {
         let found = tree.remove(*p, h);
         debug_assert!(found, "indexed point {p:?} missing");

@@ -1,0 +1,286 @@
+//! The reader process of the benchmark (`ygg-bench ipc reader`, started by the writer).
+//!
+//! Protocol: the reader prints `ready <generation>` once it holds its first validated
+//! snapshot, then obeys lines on stdin; stdin closing means "exit cleanly".
+//!
+//! * `latency`: blocks in [`SceneReader::wait_next`]; for each new snapshot records the
+//!   generation, the manifest stamp, the Unix time it held the validated view and (with
+//!   `--query-layer`) the time a nearest-node query on it was answered. `report` prints
+//!   the records as `seen <gen> <stamp> <visible> <answered>` lines and `end`.
+//! * `qps`: on `start`, loops `latest()` + nearest-node query on the newest snapshot until
+//!   `stop`, then prints `qps <queries> <elapsed ns> <median ns> <p99 ns> <snapshots>`.
+//! * `socket`: the Hydra-style baseline: reads length-prefixed frames from a Unix socket,
+//!   deserializes each into an owned [`PlainGraph`] and prints `sock <seq> <done ns>
+//!   <nodes>`.
+
+use super::socket::PlainGraph;
+use super::{Res, unix_ns};
+use std::io::{BufRead, Read, Write};
+use std::path::PathBuf;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
+use std::time::{Duration, Instant};
+use ygg_reader::{ReaderBuilder, ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
+use ygg_store::query::nearest_nodes;
+use ygg_store::{ArchivedScene, Point, SceneView, Scope};
+
+/// Options of the hidden `ygg-bench ipc reader`.
+#[derive(clap::Args, Debug)]
+pub struct ReaderArgs {
+    /// Scene name.
+    #[arg(long)]
+    scene: String,
+    /// iceoryx2 file-name prefix.
+    #[arg(long)]
+    prefix: String,
+    /// Pid of the benchmark; the reader exits when it is gone.
+    #[arg(long)]
+    parent: u32,
+    /// What to do.
+    #[arg(long, value_enum)]
+    mode: Mode,
+    /// Layer (by name) of the nearest-node query; none: no query.
+    #[arg(long)]
+    query_layer: Option<String>,
+    /// Unix socket to read frames from (socket mode).
+    #[arg(long)]
+    socket: Option<PathBuf>,
+    /// Index among the case's readers (seeds the query points).
+    #[arg(long, default_value_t = 0)]
+    index: usize,
+}
+
+/// Reader behaviours.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Record publish-to-visible times.
+    Latency,
+    /// Query in a loop.
+    Qps,
+    /// Deserialize frames from a Unix socket.
+    Socket,
+}
+
+/// Commands from the writer.
+enum Cmd {
+    Report,
+    Start,
+    Stop,
+    Exit,
+}
+
+/// Runs the reader process.
+pub fn main(args: &ReaderArgs) -> Res<()> {
+    // Die with the benchmark: SIGTERM (handled, so the reader still cleans up) when the
+    // parent goes away, even if it was SIGKILLed.
+    rustix::process::set_parent_process_death_signal(Some(rustix::process::Signal::TERM))
+        .map_err(|e| format!("cannot set the parent-death signal: {e}"))?;
+    if rustix::process::getppid().map(|p| p.as_raw_pid() as u32) != Some(args.parent) {
+        return Err("the benchmark exited before this reader started".into());
+    }
+    let _ = ygg_reader::limits::raise_open_file_limit();
+    let commands = read_commands();
+    match args.mode {
+        Mode::Latency => latency(args, &commands),
+        Mode::Qps => qps(args, &commands),
+        Mode::Socket => socket(args),
+    }
+}
+
+fn read_commands() -> Receiver<Cmd> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { break };
+            let cmd = match line.trim() {
+                "report" => Cmd::Report,
+                "start" => Cmd::Start,
+                "stop" => Cmd::Stop,
+                _ => continue,
+            };
+            if tx.send(cmd).is_err() {
+                return;
+            }
+        }
+        let _ = tx.send(Cmd::Exit);
+    });
+    rx
+}
+
+fn attach(args: &ReaderArgs) -> Res<(SceneReader, SceneSnapshot)> {
+    let subscriber = ReaderBuilder::new(&args.scene)
+        .iceoryx_prefix(&args.prefix)
+        .handle_termination_signals(true)
+        .open()?;
+    let mut reader = SceneReader::with_subscriber(subscriber);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while Instant::now() < deadline {
+        if let Some(snapshot) = reader.wait_next(Duration::from_millis(100))? {
+            return Ok((reader, snapshot));
+        }
+    }
+    Err(format!("no snapshot of scene {} within 30 s", args.scene).into())
+}
+
+/// A deterministic stream of query points around the office.
+struct Points(u64);
+
+impl Points {
+    fn next(&mut self) -> Point {
+        let mut c = || {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
+        };
+        [c() * 50.0 - 5.0, c() * 40.0 - 5.0, c() * 3.0]
+    }
+}
+
+/// Answers a nearest-node query on `layer` (by name); the answer's node id, or 0.
+fn query(view: &ArchivedScene<'_>, layer: &str, points: &mut Points) -> Res<u64> {
+    let l = view
+        .layer_by_name(layer)
+        .ok_or_else(|| format!("the snapshot has no layer {layer:?}"))?;
+    let found = nearest_nodes(view, Scope::Layer(l), points.next(), 1)?;
+    Ok(found.first().map_or(0, |(id, _)| id.0))
+}
+
+fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
+    let (mut reader, first) = attach(args)?;
+    println!("ready {}", first.generation());
+    drop(first);
+    let mut points = Points(args.index as u64 + 1);
+    // (generation, manifest stamp, visible, answered)
+    let mut records: Vec<[u64; 4]> = Vec::with_capacity(4096);
+    loop {
+        match commands.try_recv() {
+            Ok(Cmd::Report) => {
+                let mut out = std::io::stdout().lock();
+                for [g, s, v, a] in records.drain(..) {
+                    writeln!(out, "seen {g} {s} {v} {a}")?;
+                }
+                writeln!(out, "end")?;
+                out.flush()?;
+            }
+            Ok(Cmd::Exit) | Err(TryRecvError::Disconnected) => return Ok(()),
+            Ok(Cmd::Start | Cmd::Stop) | Err(TryRecvError::Empty) => {}
+        }
+        match reader.wait_next(Duration::from_millis(20)) {
+            Ok(Some(snapshot)) => {
+                let view = snapshot.view();
+                let visible = unix_ns();
+                let stamp = view.published_unix_ns();
+                let generation = view.generation();
+                let answered = match &args.query_layer {
+                    Some(layer) => {
+                        std::hint::black_box(query(&view, layer, &mut points)?);
+                        unix_ns()
+                    }
+                    None => visible,
+                };
+                records.push([generation, stamp, visible, answered]);
+            }
+            Ok(None) => {}
+            Err(SceneReceiveError::Receive(ReceiveError::Terminated)) => return Ok(()),
+            Err(e) => return Err(e.into()),
+        }
+    }
+}
+
+fn qps(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
+    let layer = args
+        .query_layer
+        .as_deref()
+        .ok_or("qps mode needs --query-layer")?;
+    let (mut reader, first) = attach(args)?;
+    println!("ready {}", first.generation());
+    drop(first);
+    let mut points = Points(args.index as u64 + 1);
+    let mut latencies: Vec<u32> = Vec::new();
+    loop {
+        match commands.recv_timeout(Duration::from_millis(100)) {
+            Ok(Cmd::Start) => {}
+            Ok(Cmd::Exit) | Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            Ok(Cmd::Report | Cmd::Stop) | Err(RecvTimeoutError::Timeout) => {
+                if reader.termination_requested() {
+                    return Ok(());
+                }
+                continue;
+            }
+        }
+        latencies.clear();
+        let mut snapshots = 0u64;
+        let mut last = 0u64;
+        let start = Instant::now();
+        let mut exit = false;
+        for i in 0u64.. {
+            if i.is_multiple_of(64) {
+                match commands.try_recv() {
+                    Ok(Cmd::Stop) => break,
+                    Ok(Cmd::Exit) | Err(TryRecvError::Disconnected) => {
+                        exit = true;
+                        break;
+                    }
+                    _ => {}
+                }
+                if i.is_multiple_of(4096) && reader.termination_requested() {
+                    return Ok(());
+                }
+            }
+            let t = Instant::now();
+            let snapshot = reader.latest()?.ok_or("the reader lost its snapshot")?;
+            if snapshot.generation() != last {
+                last = snapshot.generation();
+                snapshots += 1;
+            }
+            std::hint::black_box(query(&snapshot.view(), layer, &mut points)?);
+            latencies.push(u32::try_from(t.elapsed().as_nanos()).unwrap_or(u32::MAX));
+        }
+        let elapsed = start.elapsed().as_nanos();
+        latencies.sort_unstable();
+        let at = |q: f64| {
+            latencies
+                .get(((latencies.len().saturating_sub(1)) as f64 * q).round() as usize)
+                .copied()
+                .unwrap_or(0)
+        };
+        println!(
+            "qps {} {elapsed} {} {} {snapshots}",
+            latencies.len(),
+            at(0.5),
+            at(0.99)
+        );
+        if exit {
+            return Ok(());
+        }
+    }
+}
+
+fn socket(args: &ReaderArgs) -> Res<()> {
+    let path = args.socket.as_ref().ok_or("socket mode needs --socket")?;
+    let mut stream = std::os::unix::net::UnixStream::connect(path)
+        .map_err(|e| format!("cannot connect to {}: {e}", path.display()))?;
+    println!("ready 0");
+    let mut buf = Vec::new();
+    loop {
+        let mut header = [0u8; 16];
+        match stream.read_exact(&mut header) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(()),
+            Err(e) => return Err(format!("socket read: {e}").into()),
+        }
+        let len = u64::from_le_bytes(header[..8].try_into()?);
+        let seq = u64::from_le_bytes(header[8..].try_into()?);
+        let len = usize::try_from(len)?;
+        buf.resize(len, 0);
+        stream
+            .read_exact(&mut buf)
+            .map_err(|e| format!("socket read of frame {seq}: {e}"))?;
+        let graph: PlainGraph = postcard::from_bytes(&buf)
+            .map_err(|e| format!("frame {seq} does not deserialize: {e}"))?;
+        let done = unix_ns();
+        println!("sock {seq} {done} {}", graph.node_count());
+        drop(graph);
+    }
+}

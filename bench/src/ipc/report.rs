@@ -1,0 +1,456 @@
+//! Rows, statistics, targets, and the JSON and markdown reports.
+
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+
+/// One measured case.
+#[derive(Clone, Debug, Default)]
+pub struct Row {
+    /// Case name (`layer_update_office`, `size_1KB`, ...).
+    pub case: String,
+    /// What is measured, for the markdown table.
+    pub what: String,
+    /// Median, µs.
+    pub median_us: f64,
+    /// 99th percentile, µs.
+    pub p99_us: f64,
+    /// Samples behind median and p99 (summed over rounds).
+    pub samples: usize,
+    /// A rate (queries or updates per second), when the case measures one.
+    pub value: Option<f64>,
+    /// The rate's unit.
+    pub unit: Option<&'static str>,
+    /// Further numbers (named), reported as they are.
+    pub extra: Vec<(String, f64)>,
+    /// Free text (skipped snapshots, sizes).
+    pub note: String,
+    /// Per-round (median, p99, value), when there were several rounds.
+    pub rounds: Vec<(f64, f64, Option<f64>)>,
+}
+
+impl Row {
+    /// A latency row from nanosecond samples.
+    pub fn latency(case: &str, what: &str, samples_ns: &[f64]) -> Row {
+        let (median_us, p99_us) = median_p99_us(samples_ns);
+        Row {
+            case: case.into(),
+            what: what.into(),
+            median_us,
+            p99_us,
+            samples: samples_ns.len(),
+            ..Row::default()
+        }
+    }
+
+    /// Adds a named number.
+    pub fn with(mut self, key: &str, value: f64) -> Row {
+        self.extra.push((key.into(), value));
+        self
+    }
+
+    /// The named number `key`.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.extra.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+    }
+}
+
+/// Median and 99th percentile (nearest rank) of nanosecond samples, in µs.
+pub fn median_p99_us(samples_ns: &[f64]) -> (f64, f64) {
+    if samples_ns.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut v = samples_ns.to_vec();
+    v.sort_unstable_by(f64::total_cmp);
+    let rank = |q: f64| {
+        let i = ((v.len() as f64 * q).ceil() as usize).clamp(1, v.len()) - 1;
+        v[i] / 1e3
+    };
+    (rank(0.5), rank(0.99))
+}
+
+/// Median of a list (NaN when empty).
+pub fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// Merges the rows of several rounds: per case, the median over rounds of the median,
+/// the p99, the rate and every extra number; samples add up.
+pub fn aggregate(rounds: &[Vec<Row>]) -> Vec<Row> {
+    let mut order: Vec<String> = Vec::new();
+    let mut by_case: BTreeMap<String, Vec<&Row>> = BTreeMap::new();
+    for round in rounds {
+        for r in round {
+            if !by_case.contains_key(&r.case) {
+                order.push(r.case.clone());
+            }
+            by_case.entry(r.case.clone()).or_default().push(r);
+        }
+    }
+    order
+        .into_iter()
+        .map(|case| {
+            let rows = &by_case[&case];
+            let first = rows[0];
+            let pick =
+                |f: &dyn Fn(&Row) -> f64| median(&rows.iter().map(|r| f(r)).collect::<Vec<_>>());
+            let value = first
+                .value
+                .map(|_| pick(&|r: &Row| r.value.unwrap_or(f64::NAN)));
+            let extra = first
+                .extra
+                .iter()
+                .map(|(k, _)| (k.clone(), pick(&|r: &Row| r.get(k).unwrap_or(f64::NAN))))
+                .collect();
+            let mut notes: Vec<&str> = rows
+                .iter()
+                .map(|r| r.note.as_str())
+                .filter(|n| !n.is_empty())
+                .collect();
+            notes.dedup();
+            Row {
+                case,
+                what: first.what.clone(),
+                median_us: pick(&|r: &Row| r.median_us),
+                p99_us: pick(&|r: &Row| r.p99_us),
+                samples: rows.iter().map(|r| r.samples).sum(),
+                value,
+                unit: first.unit,
+                extra,
+                note: notes.join("; "),
+                rounds: if rows.len() > 1 {
+                    rows.iter()
+                        .map(|r| (r.median_us, r.p99_us, r.value))
+                        .collect()
+                } else {
+                    Vec::new()
+                },
+            }
+        })
+        .collect()
+}
+
+/// A target of issue 5 and whether this run met it.
+#[derive(Clone, Debug)]
+pub struct Target {
+    /// The target as the issue states it.
+    pub text: String,
+    /// Measured value(s), in words.
+    pub measured: String,
+    /// Met, missed, or not measured in this run.
+    pub met: Option<bool>,
+}
+
+/// Evaluates the issue's targets on the aggregated rows.
+pub fn targets(rows: &[Row]) -> Vec<Target> {
+    let find = |c: &str| rows.iter().find(|r| r.case == c);
+    let mut out = Vec::new();
+    out.push(match find("layer_update_office") {
+        Some(r) => Target {
+            text: "single-layer update (one agent pose) visible in a reader ≤ 200 µs p50 on the office".into(),
+            measured: format!(
+                "p50 {} to the first query answered ({} to the validated snapshot)",
+                fmt_us(r.median_us),
+                fmt_us(r.get("visible_median_us").unwrap_or(f64::NAN))
+            ),
+            met: Some(r.median_us <= 200.0),
+        },
+        None => not_measured("single-layer update visible ≤ 200 µs p50"),
+    });
+    out.push(match find("full_office") {
+        Some(r) => Target {
+            text: "full office visible ≤ 10 ms".into(),
+            measured: format!("p50 {}, p99 {}", fmt_us(r.median_us), fmt_us(r.p99_us)),
+            met: Some(r.median_us <= 10_000.0),
+        },
+        None => not_measured("full office visible ≤ 10 ms"),
+    });
+    out.push(match (find("shm_40MB"), find("socket_40MB")) {
+        (Some(s), Some(k)) => {
+            let ratio = k.median_us / s.median_us;
+            let mut measured = format!(
+                "{ratio:.1}× for the whole graph (shm p50 {}, socket p50 {})",
+                fmt_us(s.median_us),
+                fmt_us(k.median_us)
+            );
+            if let Some(one) = find("shm_40MB_layer_update") {
+                measured.push_str(&format!(
+                    "; {:.0}× for one agent pose (shm p50 {}: only that layer is sent)",
+                    k.median_us / one.median_us,
+                    fmt_us(one.median_us)
+                ));
+            }
+            Target {
+                text: "≥ 20× faster than the socket baseline at 40 MB (the same graph both ways)"
+                    .into(),
+                measured,
+                met: Some(ratio >= 20.0),
+            }
+        }
+        _ => not_measured("≥ 20× faster than the socket baseline at 40 MB"),
+    });
+    out.push(match (find("readers_1"), find("readers_8")) {
+        (Some(one), Some(eight)) => {
+            let ratio = eight.p99_us / one.p99_us;
+            Target {
+                text: "p99 with 8 readers ≤ 1.5× that with 1 reader".into(),
+                measured: format!(
+                    "{ratio:.2}× (p99 {} with 8, {} with 1)",
+                    fmt_us(eight.p99_us),
+                    fmt_us(one.p99_us)
+                ),
+                met: Some(ratio <= 1.5),
+            }
+        }
+        _ => not_measured("p99 with 8 readers ≤ 1.5× that with 1 reader"),
+    });
+    let zero = find("writer_throughput_0_readers");
+    let four = find("writer_throughput_4_readers");
+    match (zero, four) {
+        (Some(z), Some(f)) => {
+            let (zw, fw) = (z.value.unwrap_or(f64::NAN), f.value.unwrap_or(f64::NAN));
+            let drop = 1.0 - fw / zw;
+            out.push(Target {
+                text: "writer throughput drop with 4 busy readers ≤ 10% (updates per wall-clock second)".into(),
+                measured: format!(
+                    "{:.1}% ({zw:.0} updates/s with 0 readers, {fw:.0} with 4)",
+                    drop * 100.0
+                ),
+                met: Some(drop <= 0.10),
+            });
+            let zc = z.get("updates_per_writer_cpu_s").unwrap_or(f64::NAN);
+            let fc = f.get("updates_per_writer_cpu_s").unwrap_or(f64::NAN);
+            let drop = 1.0 - fc / zc;
+            out.push(Target {
+                text: "the same per second of writer CPU time (what an update costs, leaving out the CPU the readers take on 2 cores)".into(),
+                measured: format!(
+                    "{:.1}% ({zc:.0} updates per CPU-second with 0 readers, {fc:.0} with 4)",
+                    drop * 100.0
+                ),
+                met: Some(drop <= 0.10),
+            });
+        }
+        _ => out.push(not_measured(
+            "writer throughput drop with 4 busy readers ≤ 10%",
+        )),
+    }
+    out
+}
+
+fn not_measured(text: &str) -> Target {
+    Target {
+        text: text.into(),
+        measured: "not measured in this run".into(),
+        met: None,
+    }
+}
+
+/// A duration in µs, printed with a sensible unit.
+pub fn fmt_us(us: f64) -> String {
+    if us.is_nan() {
+        "–".into()
+    } else if us >= 10_000.0 {
+        format!("{:.1} ms", us / 1e3)
+    } else if us >= 1_000.0 {
+        format!("{:.2} ms", us / 1e3)
+    } else {
+        format!("{us:.0} µs")
+    }
+}
+
+fn num(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+/// The JSON report: `{"machine", "rows": [{"case", "median_us", "p99_us", ...}], ...}`.
+pub fn to_json(meta: &Meta, rows: &[Row], targets: &[Target]) -> Value {
+    let rows: Vec<Value> = rows
+        .iter()
+        .map(|r| {
+            let mut o = json!({
+                "case": r.case,
+                "median_us": num(r.median_us),
+                "p99_us": num(r.p99_us),
+                "samples": r.samples,
+            });
+            let m = o.as_object_mut().expect("an object");
+            if let Some(v) = r.value {
+                m.insert("value".into(), num(v));
+                m.insert("unit".into(), json!(r.unit.unwrap_or("")));
+            }
+            for (k, v) in &r.extra {
+                m.insert(k.clone(), num(*v));
+            }
+            if !r.note.is_empty() {
+                m.insert("note".into(), json!(r.note));
+            }
+            if !r.rounds.is_empty() {
+                m.insert(
+                    "rounds".into(),
+                    json!(
+                        r.rounds
+                            .iter()
+                            .map(|(a, b, v)| json!({"median_us": num(*a), "p99_us": num(*b), "value": v.map(num)}))
+                            .collect::<Vec<_>>()
+                    ),
+                );
+            }
+            o
+        })
+        .collect();
+    json!({
+        "machine": meta.machine,
+        "machine_at_end": meta.machine_end,
+        "mode": if meta.quick { "quick" } else { "full" },
+        "rounds": meta.rounds,
+        "duration_s": meta.duration_s,
+        "rows": rows,
+        "targets": targets.iter().map(|t| json!({"target": t.text, "measured": t.measured, "met": t.met})).collect::<Vec<_>>(),
+        "leftover_shm_files": meta.leftovers,
+        "notes": meta.notes,
+    })
+}
+
+/// What the report says about the run itself.
+pub struct Meta {
+    /// Machine description at the start (cores, CPU, load average).
+    pub machine: Value,
+    /// The same at the end (load average again).
+    pub machine_end: Value,
+    /// Quick mode.
+    pub quick: bool,
+    /// Rounds per case.
+    pub rounds: usize,
+    /// Wall time of the run.
+    pub duration_s: f64,
+    /// Files left in /dev/shm or /tmp/iceoryx2 after a case (should be empty).
+    pub leftovers: Vec<String>,
+    /// Method notes.
+    pub notes: Vec<String>,
+    /// The command line.
+    pub command: String,
+}
+
+/// The markdown report.
+pub fn to_markdown(meta: &Meta, rows: &[Row], targets: &[Target]) -> String {
+    let m = &meta.machine;
+    let s = |v: &Value, k: &str| {
+        v.get(k).map_or(String::new(), |x| {
+            x.to_string().trim_matches('"').to_owned()
+        })
+    };
+    let mut md = String::new();
+    md.push_str("# IPC latency benchmark (issue 5, item 4)\n\n");
+    md.push_str(&format!(
+        "Machine: {} cores, {}; load average {} at the start, {} at the end (a shared, noisy host). \
+         Mode: {}, {} round(s) per case, {:.0} s in all.\n\nCommand: `{}`\n\n",
+        s(m, "cores"),
+        s(m, "cpu"),
+        s(m, "loadavg"),
+        s(&meta.machine_end, "loadavg"),
+        if meta.quick { "quick" } else { "full" },
+        meta.rounds,
+        meta.duration_s,
+        meta.command,
+    ));
+    md.push_str("## Targets\n\n| target | measured | met |\n|---|---|---|\n");
+    for t in targets {
+        let met = match t.met {
+            Some(true) => "yes",
+            Some(false) => "**no**",
+            None => "–",
+        };
+        md.push_str(&format!("| {} | {} | {met} |\n", t.text, t.measured));
+    }
+    md.push_str("\n## Results\n\nLatencies from the writer's `publish()` call unless the row says otherwise; ");
+    md.push_str("\"stamp→visible\" is from the manifest's `published_unix_ns` (taken after the layers are archived) to the validated snapshot: transport plus validation alone.\n\n");
+    md.push_str("| case | what | median | p99 | samples | rate | stamp→visible p50 | notes |\n|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let rate = match (r.value, r.unit) {
+            (Some(v), Some(u)) => format!("{v:.0} {u}"),
+            _ => String::new(),
+        };
+        let stamp = r.get("stamp_median_us").map(fmt_us).unwrap_or_default();
+        let mut notes = Vec::new();
+        for (k, v) in &r.extra {
+            if k == "stamp_median_us" {
+                continue;
+            }
+            notes.push(format!("{k} {}", fmt_extra(k, *v)));
+        }
+        if !r.note.is_empty() {
+            notes.push(r.note.clone());
+        }
+        md.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.case,
+            r.what,
+            fmt_us(r.median_us),
+            fmt_us(r.p99_us),
+            r.samples,
+            rate,
+            stamp,
+            notes.join(", ")
+        ));
+    }
+    let with_rounds: Vec<&Row> = rows.iter().filter(|r| !r.rounds.is_empty()).collect();
+    if !with_rounds.is_empty() {
+        md.push_str("\n## Per round (median / p99, rate)\n\nThe tables above give the median over rounds.\n\n| case | rounds |\n|---|---|\n");
+        for r in with_rounds {
+            let cells: Vec<String> = r
+                .rounds
+                .iter()
+                .map(|(a, b, v)| match v {
+                    Some(v) => format!("{} / {} ({v:.0})", fmt_us(*a), fmt_us(*b)),
+                    None => format!("{} / {}", fmt_us(*a), fmt_us(*b)),
+                })
+                .collect();
+            md.push_str(&format!("| `{}` | {} |\n", r.case, cells.join("; ")));
+        }
+    }
+    md.push_str("\n## Method\n\n");
+    for n in &meta.notes {
+        md.push_str(&format!("- {n}\n"));
+    }
+    md.push_str(&format!(
+        "- Shared-memory files left after the cases: {}.\n",
+        if meta.leftovers.is_empty() {
+            "none".to_owned()
+        } else {
+            meta.leftovers.join("; ")
+        }
+    ));
+    md
+}
+
+fn fmt_extra(key: &str, v: f64) -> String {
+    if key.ends_with("_us") {
+        fmt_us(v)
+    } else if key.ends_with("bytes") {
+        fmt_bytes(v)
+    } else if v.fract() == 0.0 || v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+/// Bytes with a decimal unit.
+pub fn fmt_bytes(b: f64) -> String {
+    if b >= 1e6 {
+        format!("{:.1} MB", b / 1e6)
+    } else if b >= 1e3 {
+        format!("{:.1} KB", b / 1e3)
+    } else {
+        format!("{b:.0} B")
+    }
+}
