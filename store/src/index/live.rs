@@ -4,9 +4,10 @@
 //! coordinate on the dimension a full bucket must split on (an axis-aligned wall, or
 //! duplicate points): its `add` then fails. This tree stores the same `(point, item)`
 //! multiset but always splits a full leaf on its widest dimension, keeps points that are
-//! identical in every dimension in a chain of leaves, and rebuilds any sub-tree that
-//! becomes unbalanced (scapegoat style), so every insert and remove succeeds and depth
-//! stays logarithmic.
+//! identical in every dimension in a chain of leaves, and keeps depth logarithmic like a
+//! scapegoat tree: an insert that lands deeper than [`depth_limit`] rebuilds the highest
+//! unbalanced sub-tree on its path, and the whole tree is rebuilt when it has halved.
+//! Every insert and remove succeeds; splits and rebuilds are amortised O(log n).
 //!
 //! # Invariants
 //! - An entry lives in the leaf reached by descending with its point, going left at an
