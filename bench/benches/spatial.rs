@@ -105,8 +105,9 @@ fn build(n: usize) -> Scene {
     let r_small = fit(10.0);
     let r_large = fit(1000.0);
     // Cones from random eyes in random horizontal directions, their range fitted so that
-    // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball).
-    let range = fit(15_000.0);
+    // about 1,000 points are in view (a 30° cone holds ~6.7% of its range's ball; small
+    // scenes see fewer).
+    let range = fit(15_000f32.min(n as f32 / 4.0));
     let cones: Vec<ConeView> = queries
         .iter()
         .map(|&eye| {
@@ -234,9 +235,37 @@ fn brute_visible(points: &[Point], cone: &ConeView) -> Vec<u32> {
 /// Per-call latency percentiles (p50, p99) in nanoseconds over `iters` calls.
 fn percentiles(iters: usize, mut f: impl FnMut(usize) -> Duration) -> (f64, f64) {
     let mut ns: Vec<u64> = (0..iters).map(|i| f(i).as_nanos() as u64).collect();
+    summarize(&mut ns)
+}
+
+fn summarize(ns: &mut [u64]) -> (f64, f64) {
     ns.sort_unstable();
     let at = |q: f64| ns[((ns.len() - 1) as f64 * q).round() as usize] as f64;
     (at(0.5), at(0.99))
+}
+
+/// Per-call p50 / p99 of several variants of one query, called in turn for each query
+/// point so that a noisy machine disturbs every variant alike.
+fn interleaved(
+    iters: usize,
+    variants: &mut [(&str, &mut dyn FnMut(usize))],
+) -> Vec<(String, f64, f64)> {
+    let mut samples: Vec<Vec<u64>> = vec![Vec::with_capacity(iters); variants.len()];
+    for i in 0..iters {
+        for (v, (_, f)) in variants.iter_mut().enumerate() {
+            let t = Instant::now();
+            f(i);
+            samples[v].push(t.elapsed().as_nanos() as u64);
+        }
+    }
+    variants
+        .iter()
+        .zip(samples.iter_mut())
+        .map(|((name, _), ns)| {
+            let (p50, p99) = summarize(ns);
+            (name.to_string(), p50, p99)
+        })
+        .collect()
 }
 
 fn timed(f: impl FnOnce()) -> Duration {
@@ -300,132 +329,136 @@ fn report(n: usize, s: &mut Scene) {
     let iters = if n > 2_000_000 { 3_000 } else { 20_000 };
     let brute_iters = (2_000_000_000 / n.max(1)).clamp(20, 2_000);
     let mut rows = Vec::new();
-    let mut row = |case: &str, (p50, p99): (f64, f64)| {
-        rows.push(Row {
-            case: case.to_owned(),
-            p50,
-            p99,
-        })
+    let mut family = |name: &str, iters: usize, variants: &mut [(&str, &mut dyn FnMut(usize))]| {
+        for (variant, p50, p99) in interleaved(iters, variants) {
+            rows.push(Row {
+                case: format!("{name} / {variant}"),
+                p50,
+                p99,
+            });
+        }
     };
     let (g, bare, points) = (&s.g, &s.bare, &s.points);
-    let k1 = NonZeroUsize::new(1).unwrap();
     let k10 = NonZeroUsize::new(10).unwrap();
-    for (m, k) in [(1, k1), (10, k10)] {
-        row(
-            &format!("nearest m={m} / bare kiddo"),
-            percentiles(iters, |i| {
-                timed(|| {
-                    if m == 1 {
-                        black_box(
-                            bare.query(&q(i))
-                                .nearest_one::<SquaredEuclidean<f32>>()
-                                .execute(),
-                        );
-                    } else {
-                        black_box(
-                            bare.query(&q(i))
-                                .nearest_n::<SquaredEuclidean<f32>>(k)
-                                .execute(),
-                        );
-                    }
-                })
+    family(
+        "nearest m=1",
+        iters,
+        &mut [
+            ("bare kiddo", &mut |i| {
+                black_box(
+                    bare.query(&q(i))
+                        .nearest_one::<SquaredEuclidean<f32>>()
+                        .execute(),
+                );
             }),
-        );
-        row(
-            &format!("nearest m={m} / archived"),
-            percentiles(iters, |i| {
-                timed(|| {
-                    black_box(nearest_nodes(&view, scope, q(i), m).unwrap());
-                })
+            ("archived", &mut |i| {
+                black_box(nearest_nodes(&view, scope, q(i), 1).unwrap());
             }),
-        );
-        row(
-            &format!("nearest m={m} / live"),
-            percentiles(iters, |i| {
-                timed(|| {
-                    black_box(nearest_nodes(g, scope, q(i), m).unwrap());
-                })
+            ("live", &mut |i| {
+                black_box(nearest_nodes(g, scope, q(i), 1).unwrap());
             }),
-        );
-        row(
-            &format!("nearest m={m} / brute force"),
-            percentiles(brute_iters, |i| {
-                timed(|| {
-                    black_box(brute_nearest(points, &q(i), m));
-                })
+        ],
+    );
+    family(
+        "nearest m=10",
+        iters,
+        &mut [
+            ("bare kiddo", &mut |i| {
+                black_box(
+                    bare.query(&q(i))
+                        .nearest_n::<SquaredEuclidean<f32>>(k10)
+                        .execute(),
+                );
             }),
-        );
-    }
+            ("archived", &mut |i| {
+                black_box(nearest_nodes(&view, scope, q(i), 10).unwrap());
+            }),
+            ("live", &mut |i| {
+                black_box(nearest_nodes(g, scope, q(i), 10).unwrap());
+            }),
+        ],
+    );
     for (name, r) in [("radius small", s.r_small), ("radius large", s.r_large)] {
-        row(
-            &format!("{name} / bare kiddo"),
-            percentiles(iters / 4, |i| {
-                timed(|| {
+        family(
+            name,
+            iters / 4,
+            &mut [
+                ("bare kiddo", &mut |i| {
                     black_box(bare_within(bare, &q(i), r));
-                })
-            }),
-        );
-        row(
-            &format!("{name} / archived"),
-            percentiles(iters / 4, |i| {
-                timed(|| {
+                }),
+                ("archived", &mut |i| {
                     black_box(nodes_within_radius(&view, scope, q(i), r).unwrap());
-                })
-            }),
-        );
-        row(
-            &format!("{name} / live"),
-            percentiles(iters / 4, |i| {
-                timed(|| {
+                }),
+                ("live", &mut |i| {
                     black_box(nodes_within_radius(g, scope, q(i), r).unwrap());
-                })
-            }),
-        );
-        row(
-            &format!("{name} / brute force"),
-            percentiles(brute_iters, |i| {
-                timed(|| {
-                    black_box(brute_within(points, &q(i), r));
-                })
-            }),
+                }),
+            ],
         );
     }
     let cone = |i: usize| s.cones[i % s.cones.len()];
-    row(
-        "visible / bare kiddo",
-        percentiles(iters / 4, |i| {
-            timed(|| {
+    family(
+        "visible",
+        iters / 4,
+        &mut [
+            ("bare kiddo", &mut |i| {
                 black_box(bare_visible(bare, &cone(i)));
-            })
-        }),
-    );
-    row(
-        "visible / archived",
-        percentiles(iters / 4, |i| {
-            timed(|| {
+            }),
+            ("archived", &mut |i| {
                 black_box(visible(&view, s.room, &cone(i)).unwrap());
-            })
-        }),
-    );
-    row(
-        "visible / live",
-        percentiles(iters / 4, |i| {
-            timed(|| {
+            }),
+            ("live", &mut |i| {
                 black_box(visible(g, s.room, &cone(i)).unwrap());
-            })
-        }),
+            }),
+        ],
     );
-    row(
-        "visible / brute force",
-        percentiles(brute_iters, |i| {
-            timed(|| {
-                black_box(brute_visible(points, &cone(i)));
-            })
-        }),
+    for (name, m) in [("nearest m=1", 1), ("nearest m=10", 10)] {
+        family(
+            name,
+            brute_iters,
+            &mut [("brute force", &mut |i| {
+                black_box(brute_nearest(points, &q(i), m));
+            })],
+        );
+    }
+    for (name, r) in [("radius small", s.r_small), ("radius large", s.r_large)] {
+        family(
+            name,
+            brute_iters,
+            &mut [("brute force", &mut |i| {
+                black_box(brute_within(points, &q(i), r));
+            })],
+        );
+    }
+    family(
+        "visible",
+        brute_iters,
+        &mut [("brute force", &mut |i| {
+            black_box(brute_visible(points, &cone(i)));
+        })],
     );
     let live_bytes = g.layer_index(s.mesh).unwrap().memory_bytes();
     let archived_bytes = view.layer_index(s.mesh).unwrap().memory_bytes();
     drop(view);
+    // Validated open of the scene's `.ygg` file (mapped; the page cache is warm), with
+    // its two kd-trees (layer index and node index), and the same without indexes.
+    let open_ms = |g: &SceneGraph| {
+        let dir = std::env::temp_dir().join(format!("ygg-spatial-bench-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scene.ygg");
+        g.save(&path).unwrap();
+        let bytes = std::fs::metadata(&path).unwrap().len();
+        let mut ms: Vec<f64> = (0..5)
+            .map(|_| {
+                let t = Instant::now();
+                black_box(SnapshotFile::open(&path).unwrap());
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect();
+        ms.sort_by(f64::total_cmp);
+        std::fs::remove_dir_all(&dir).unwrap();
+        (ms[2], bytes as f64 / 1e6)
+    };
+    let (open_indexed, mb_indexed) = open_ms(&s.g);
     let mut rng = ChaCha8Rng::seed_from_u64(99);
     let update_iters = iters.min(20_000);
     for (label, layer_index, node_index) in [
@@ -452,6 +485,7 @@ fn report(n: usize, s: &mut Scene) {
             });
         }
     }
+    let (open_plain, mb_plain) = open_ms(&s.g);
     s.g.enable_layer_index(s.mesh).unwrap();
     s.g.enable_node_index(s.room).unwrap();
 
@@ -467,7 +501,17 @@ fn report(n: usize, s: &mut Scene) {
             .find(|r| r.case == format!("{family} / bare kiddo"))
             .map(|r| r.p50)
     };
+    let family_of = |case: &str| case.split(" / ").next().unwrap().to_owned();
+    let mut families: Vec<String> = Vec::new();
     for r in &rows {
+        if !families.contains(&family_of(&r.case)) {
+            families.push(family_of(&r.case));
+        }
+    }
+    let ordered = families
+        .iter()
+        .flat_map(|f| rows.iter().filter(move |r| family_of(&r.case) == *f));
+    for r in ordered {
         let ratio = floor(&r.case).map_or(String::new(), |f| format!("{:.2}×", r.p50 / f));
         println!(
             "| {} | {} | {} | {ratio} |",
@@ -480,6 +524,9 @@ fn report(n: usize, s: &mut Scene) {
         "\nindex bytes per point: live {:.2}, archived {:.2} (12 of them are the point's coordinates)\n",
         live_bytes as f64 / n as f64,
         archived_bytes as f64 / n as f64
+    );
+    println!(
+        "validated open: {open_indexed:.2} ms for {mb_indexed:.1} MB with both indexes, {open_plain:.2} ms for {mb_plain:.1} MB without\n"
     );
 }
 

@@ -39,6 +39,8 @@ pub struct Node {
     /// (min x, y, z, then max x, y, z). A face moves inward only when its count drops
     /// to zero, so most removals and moves cost O(1) per enabled ancestor.
     pub(crate) face_counts: [u32; 6],
+    /// The node's handle in the live spatial indexes (`u32::MAX` until it has one).
+    pub(crate) index_handle: u32,
 }
 
 /// One layer of the live graph.
@@ -310,6 +312,7 @@ impl SceneGraph {
             bbox_enabled: false,
             aabb: None,
             face_counts: [0; 6],
+            index_handle: u32::MAX,
         });
         Ok(())
     }

@@ -80,7 +80,7 @@ pub(crate) fn nearest_visit<F: FnMut(f32, u32) -> f32>(tree: &ArchivedKdTree, c:
         bound: f32::INFINITY,
         f,
     };
-    walk.go(1, 0, [0.0; 3]);
+    walk.run();
 }
 
 struct Walk<'a, F> {
@@ -94,23 +94,34 @@ struct Walk<'a, F> {
 }
 
 impl<F: FnMut(f32, u32) -> f32> Walk<'_, F> {
-    fn go(&mut self, s: usize, level: u32, off: [f32; 3]) {
-        if level == self.levels {
-            self.leaf(s - (1 << level));
-            return;
-        }
-        let dim = (level % 3) as usize;
-        let delta = self.c[dim] - self.stems[s];
-        let (near, far) = if delta >= 0.0 {
-            (2 * s + 1, 2 * s)
-        } else {
-            (2 * s, 2 * s + 1)
-        };
-        self.go(near, level + 1, off);
-        let mut far_off = off;
-        far_off[dim] = delta.abs();
-        if super::live::cell_distance_squared(&far_off) <= self.bound {
-            self.go(far, level + 1, far_off);
+    /// Depth-first, nearer child first; far children wait on a stack with their bound.
+    /// One descent pushes at most one cell per level (at most 30), so 32 slots suffice.
+    fn run(&mut self) {
+        let mut stack = [(0usize, 0u32, [0.0f32; 3], 0.0f32); 32];
+        stack[0] = (1, 0, [0.0; 3], 0.0);
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            let (mut s, mut level, off, rd) = stack[depth];
+            if rd > self.bound {
+                continue;
+            }
+            while level < self.levels {
+                let dim = (level % 3) as usize;
+                let delta = self.c[dim] - self.stems[s];
+                let right = usize::from(delta >= 0.0);
+                let far_delta = delta.abs();
+                let mut far_off = off;
+                far_off[dim] = far_delta;
+                let far_rd = super::live::cell_distance_squared(&far_off);
+                if far_rd <= self.bound && depth < stack.len() {
+                    stack[depth] = (2 * s + 1 - right, level + 1, far_off, far_rd);
+                    depth += 1;
+                }
+                s = 2 * s + right;
+                level += 1;
+            }
+            self.leaf(s - (1 << self.levels));
         }
     }
 

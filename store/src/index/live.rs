@@ -4,16 +4,16 @@
 //! coordinate on the dimension a full bucket must split on (an axis-aligned wall, or
 //! duplicate points): its `add` then fails. This tree stores the same `(point, item)`
 //! multiset but always splits a full leaf on its widest dimension, keeps points that are
-//! identical in every dimension in a chain of leaves, and rebuilds any sub-tree that
-//! becomes unbalanced (scapegoat style), so every insert and remove succeeds and depth
-//! stays logarithmic.
+//! identical in every dimension in a chain of leaves, and keeps depth logarithmic like a
+//! scapegoat tree: an insert that lands deeper than [`depth_limit`] rebuilds the highest
+//! unbalanced sub-tree on its path, and the whole tree is rebuilt when it has halved.
+//! Every insert and remove succeeds; splits and rebuilds are amortised O(log n).
 //!
 //! # Invariants
 //! - An entry lives in the leaf reached by descending with its point, going left at an
 //!   inner node exactly when `point[dim] < split`.
 //! - Every leaf but the root holds at least one entry; chained leaves (`next`) hold
 //!   entries whose points are all equal.
-//! - `left_count` / `right_count` are the numbers of entries below each side.
 //!
 //! Distances are [`crate::distance_squared`] bit for bit, and pruning bounds are
 //! computed so that they never exceed the distance of any entry they prune (see
@@ -113,8 +113,6 @@ struct Inner {
     dim: u32,
     left: u32,
     right: u32,
-    left_count: u32,
-    right_count: u32,
 }
 
 /// A dynamic kd-tree over `(point, item)` entries (a multiset: duplicates allowed).
@@ -310,8 +308,6 @@ impl LiveKdTree {
             dim: dim as u32,
             left,
             right,
-            left_count: left_entries.len() as u32,
-            right_count: right_entries.len() as u32,
         })
     }
 
@@ -395,12 +391,10 @@ impl LiveKdTree {
         let mut r = self.root;
         while !is_leaf(r) {
             path.push(r);
-            let n = &mut self.inners[r as usize];
+            let n = &self.inners[r as usize];
             r = if p[n.dim as usize] < n.split {
-                n.left_count += 1;
                 n.left
             } else {
-                n.right_count += 1;
                 n.right
             };
         }
@@ -411,6 +405,8 @@ impl LiveKdTree {
             self.leaves[head as usize].len as usize,
             self.leaves[head as usize].next,
         );
+        // The reference now at the bottom of `path` (the leaf, or what replaced it).
+        let mut bottom = r;
         if len < LEAF_CAP && next == NONE {
             self.leaves[head as usize].push(e);
         } else if len == LEAF_CAP && next == NONE && !self.chain_equals(head, &p) {
@@ -421,8 +417,8 @@ impl LiveKdTree {
                 *slot = leaf.entry(i);
             }
             self.free_leaf(head);
-            let new = self.build(&mut entries);
-            self.replace_child(path.last().copied(), r, new);
+            bottom = self.build(&mut entries);
+            self.replace_child(path.last().copied(), r, bottom);
         } else if self.chain_equals(head, &p) {
             self.chain_push(head, e);
         } else {
@@ -431,12 +427,12 @@ impl LiveKdTree {
             self.collect(r, &mut entries);
             entries.push(e);
             self.free_subtree(r);
-            let new = self.build(&mut entries);
-            self.replace_child(path.last().copied(), r, new);
+            bottom = self.build(&mut entries);
+            self.replace_child(path.last().copied(), r, bottom);
         }
         self.peak = self.peak.max(self.len);
         if path.len() > depth_limit(self.len) {
-            self.rebalance(&path);
+            self.rebalance(&path, bottom);
         }
         self.path = path;
     }
@@ -491,16 +487,6 @@ impl LiveKdTree {
         let found = self.chain_remove(head, &p, item);
         if found {
             self.len -= 1;
-            let mut child = r;
-            for &a in path.iter().rev() {
-                let n = &mut self.inners[a as usize];
-                if n.left == child {
-                    n.left_count -= 1;
-                } else {
-                    n.right_count -= 1;
-                }
-                child = a;
-            }
             if self.leaves[head as usize].len == 0
                 && let Some(parent) = path.pop()
             {
@@ -556,13 +542,35 @@ impl LiveKdTree {
         true
     }
 
-    /// Rebuilds the highest unbalanced sub-tree on `path` (root first).
-    fn rebalance(&mut self, path: &[u32]) {
-        for (i, &a) in path.iter().enumerate() {
+    /// Entries below `r`.
+    fn count(&self, r: u32) -> usize {
+        if is_leaf(r) {
+            let mut total = 0;
+            let mut l = leaf_index(r) as u32;
+            while l != NONE {
+                total += self.leaves[l as usize].len as usize;
+                l = self.leaves[l as usize].next;
+            }
+            total
+        } else {
+            let n = &self.inners[r as usize];
+            self.count(n.left) + self.count(n.right)
+        }
+    }
+
+    /// After an insert below `path` (root first) landed too deep: walks up from `bottom`,
+    /// sizing sub-trees, and rebuilds the first ancestor with more than 3/4 of its entries
+    /// on one side (one exists when the depth exceeds [`depth_limit`]). Sizing costs at
+    /// most the rebuilt sub-tree's size, so rebuilds stay amortised O(log n).
+    fn rebalance(&mut self, path: &[u32], bottom: u32) {
+        let mut below = self.count(bottom) as u64;
+        let mut child = bottom;
+        for (i, &a) in path.iter().enumerate().rev() {
             let n = self.inners[a as usize];
-            let total = n.left_count + n.right_count;
-            let heavy = u64::from(n.left_count.max(n.right_count));
-            if heavy * BALANCE.1 > u64::from(total) * BALANCE.0 {
+            let sibling = if n.left == child { n.right } else { n.left };
+            let other = self.count(sibling) as u64;
+            let total = below + other;
+            if below.max(other) * BALANCE.1 > total * BALANCE.0 {
                 let mut entries = Vec::with_capacity(total as usize);
                 self.collect(a, &mut entries);
                 self.free_subtree(a);
@@ -571,6 +579,8 @@ impl LiveKdTree {
                 self.replace_child(parent, a, new);
                 return;
             }
+            below = total;
+            child = a;
         }
     }
 
@@ -717,12 +727,6 @@ impl LiveKdTree {
             rlo[d] = rlo[d].max(node.split);
             let (lc, ld) = walk(t, node.left, lo, lhi, false, depth + 1)?;
             let (rc, rd) = walk(t, node.right, rlo, hi, false, depth + 1)?;
-            if lc != node.left_count || rc != node.right_count {
-                return Err(format!(
-                    "counts {}/{} != actual {lc}/{rc}",
-                    node.left_count, node.right_count
-                ));
-            }
             Ok((lc + rc, ld.max(rd)))
         }
         let (n, _) = walk(

@@ -6,7 +6,8 @@
 //!   node of its layer.
 //! - A node index holds exactly one such entry per point of every node in its root's
 //!   sub-tree (the root included).
-//! - Handles are dense `u32`s naming nodes; `ids[handle]` is the node.
+//! - Handles are dense `u32`s naming nodes: a node's handle is stored in the node
+//!   (`Node::index_handle`) and `ids[handle]` is the node.
 //!
 //! A node index changes when any node below its root changes, so the hooks touch the
 //! root's layer: a node index is republished with its root's layer.
@@ -19,10 +20,12 @@ use crate::{LayerId, NodeId, Point, SceneGraph};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
 
+/// `Node::index_handle` of a node without a handle.
+const NO_HANDLE: u32 = u32::MAX;
+
 /// The live indexes of a graph and the node handles their items use.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct LiveIndexes {
-    handle_of: FxHashMap<NodeId, u32>,
     ids: Vec<NodeId>,
     free: Vec<u32>,
     layers: BTreeMap<LayerId, LiveKdTree>,
@@ -34,29 +37,29 @@ impl LiveIndexes {
         self.layers.is_empty() && self.nodes.is_empty()
     }
 
-    /// The handle of `id`, allocated on first use.
-    fn handle(&mut self, id: NodeId) -> u32 {
-        if let Some(&h) = self.handle_of.get(&id) {
-            return h;
+    /// The handle of `node`, allocated on first use.
+    fn handle(&mut self, node: &mut Node) -> u32 {
+        if node.index_handle != NO_HANDLE {
+            return node.index_handle;
         }
         let h = match self.free.pop() {
             Some(h) => {
-                self.ids[h as usize] = id;
+                self.ids[h as usize] = node.id;
                 h
             }
             None => {
-                self.ids.push(id);
+                self.ids.push(node.id);
                 u32::try_from(self.ids.len() - 1).expect("fewer than 2^32 indexed nodes")
             }
         };
-        self.handle_of.insert(id, h);
+        node.index_handle = h;
         h
     }
 
-    fn release(&mut self, id: NodeId) {
-        if let Some(h) = self.handle_of.remove(&id) {
-            self.ids[h as usize] = NodeId::NONE;
-            self.free.push(h);
+    fn release(&mut self, node: &Node) {
+        if node.index_handle != NO_HANDLE {
+            self.ids[node.index_handle as usize] = NodeId::NONE;
+            self.free.push(node.index_handle);
         }
     }
 
@@ -108,10 +111,14 @@ impl SceneGraph {
         }
         let mut entries = Vec::new();
         for id in &l.nodes {
-            let points = &self.nodes[id].points;
-            if !points.is_empty() {
-                let h = self.indexes.handle(*id);
-                entries.extend(points.iter().map(|&p| super::live::Entry { p, item: h }));
+            let node = self.nodes.get_mut(id).expect("listed");
+            if !node.points.is_empty() {
+                let h = self.indexes.handle(node);
+                entries.extend(
+                    node.points
+                        .iter()
+                        .map(|&p| super::live::Entry { p, item: h }),
+                );
             }
         }
         self.indexes
@@ -154,7 +161,9 @@ impl SceneGraph {
         }
         let mut entries = Vec::new();
         for (id, points) in self.indexed_members(node) {
-            let h = self.indexes.handle(id);
+            let h = self
+                .indexes
+                .handle(self.nodes.get_mut(&id).expect("member"));
             entries.extend(
                 points
                     .into_iter()
@@ -225,7 +234,9 @@ impl SceneGraph {
         if roots.is_empty() && !has_layer {
             return;
         }
-        let h = self.indexes.handle(id);
+        let h = self
+            .indexes
+            .handle(self.nodes.get_mut(&id).expect("changed node"));
         let new = &self.nodes[&id].points;
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
             apply(t, h, old, new);
@@ -261,7 +272,12 @@ impl SceneGraph {
         let moved: Vec<(u32, Vec<Point>)> = self
             .indexed_members(child)
             .into_iter()
-            .map(|(id, points)| (self.indexes.handle(id), points))
+            .map(|(id, points)| {
+                let h = self
+                    .indexes
+                    .handle(self.nodes.get_mut(&id).expect("member"));
+                (h, points)
+            })
             .collect();
         for r in roots {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
@@ -283,12 +299,12 @@ impl SceneGraph {
             return;
         }
         self.indexes.nodes.remove(&node.id);
-        if let Some(&h) = self.indexes.handle_of.get(&node.id)
+        if node.index_handle != NO_HANDLE
             && let Some(t) = self.indexes.layers.get_mut(&node.layer)
         {
-            apply(t, h, &node.points, &[]);
+            apply(t, node.index_handle, &node.points, &[]);
         }
-        self.indexes.release(node.id);
+        self.indexes.release(node);
     }
 
     /// Hook: `layer` is being removed (before its nodes are).
@@ -364,7 +380,7 @@ impl SceneGraph {
             for e in t.entries() {
                 let id = self.indexes.ids.get(e.item as usize).copied();
                 match id {
-                    Some(id) if self.indexes.handle_of.get(&id) == Some(&e.item) => {
+                    Some(id) if self.nodes.get(&id).map(|n| n.index_handle) == Some(e.item) => {
                         v.push((id.0, e.p.map(f32::to_bits)));
                     }
                     _ => return Err(format!("entry with stale handle {}", e.item)),

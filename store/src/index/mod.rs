@@ -6,12 +6,22 @@
 //! |---|---|---|---|
 //! | live | [`LiveIndex`] over a [`LiveKdTree`] | [`crate::SceneGraph`], updated by every mutation | node handles |
 //! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
-//! | reader-built | [`KdIndex`] over kiddo's `ImmutableKdTree` | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
+//! | reader-built | [`KdIndex`]: kiddo's `ImmutableKdTree`, kept archived | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
+//!
+//! kiddo builds the snapshot's and the readers' trees and answers their radius queries;
+//! nearest-node search is one branch-and-bound pass over the same layout (see
+//! [`SpatialIndex::nearest_visit`]). The live graph uses its own dynamic tree, because
+//! kiddo's `MutableKdTree` refuses inserts once a full bucket's points share the
+//! coordinate it must split on (a wall, a floor, duplicates).
 //!
 //! Every index reports distances computed exactly as [`crate::distance_squared`]
-//! computes them (kiddo's scalar squared-Euclidean kernel evaluates the same expression
-//! in the same order; a test pins this), so an indexed query returns what brute force
-//! returns, bit for bit.
+//! computes them (the same expression in the same order; for kiddo's scalar kernel a
+//! test pins this), so an indexed query returns what brute force returns, bit for bit.
+//!
+//! # Memory
+//! An index stores each point's coordinates (12 bytes) and item (4 bytes). Measured
+//! totals per point: 16.5–16.8 bytes archived (kiddo's leaves, extents and stems), about
+//! 19.5 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
 
 mod kdtree;
 mod live;

@@ -70,45 +70,59 @@ pub(crate) fn radius_bound(r: f32) -> f32 {
     x
 }
 
-/// Up to this many nodes, [`TopNodes`] keeps a sorted vector; beyond, a map of every
-/// node offered with a lazily refreshed bound.
-const SMALL_M: usize = 16;
+/// Up to this many entries, [`Best`] keeps a sorted vector; beyond, a map of every key
+/// offered with a lazily refreshed bound.
+const SMALL_M: usize = 64;
 
-/// The best `m` nodes seen so far by `(squared distance, id)`. A node may be offered
-/// several times (once per point); it counts with its smallest squared distance.
-pub(crate) struct TopNodes {
+/// The best `m` keys seen so far, by squared distance and then by `before` (the order
+/// of keys at equal distance). A key may be offered several times (once per point); it
+/// counts with its smallest squared distance.
+pub(crate) struct Best<K, T> {
     m: usize,
-    /// `m <= SMALL_M`: the best nodes, ascending, each once.
-    best: Vec<(f32, NodeId)>,
-    /// `m > SMALL_M`: every node offered, with its smallest squared distance.
-    all: FxHashMap<NodeId, f32>,
+    /// `m <= SMALL_M`: the best keys, ascending, each once.
+    small: Vec<(f32, K)>,
+    /// `m > SMALL_M`: every key offered, with its smallest squared distance.
+    all: FxHashMap<K, f32>,
     /// `m > SMALL_M`: the `m`-th smallest value of `all` when last refreshed (it can only
     /// have dropped since, so it stays an upper bound of the current `m`-th smallest).
     bound: f32,
     refresh_at: usize,
+    before: T,
 }
 
-fn less(a: &(f32, NodeId), b: &(f32, NodeId)) -> bool {
-    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt()
+/// The best `m` nodes; equal distances go to the smaller id.
+pub(crate) type TopNodes = Best<NodeId, fn(NodeId, NodeId) -> bool>;
+
+pub(crate) fn top_nodes(m: usize) -> TopNodes {
+    Best::new(m, |a, b| a < b)
 }
 
-impl TopNodes {
-    pub(crate) fn new(m: usize) -> Self {
-        TopNodes {
+impl<K: Copy + Eq + std::hash::Hash, T: Fn(K, K) -> bool> Best<K, T> {
+    pub(crate) fn new(m: usize, before: T) -> Self {
+        Best {
             m,
-            best: Vec::with_capacity(m.min(SMALL_M) + 1),
+            small: Vec::with_capacity(if m <= SMALL_M { m + 1 } else { 0 }),
             all: FxHashMap::default(),
             bound: f32::INFINITY,
             refresh_at: m,
+            before,
         }
     }
 
-    pub(crate) fn offer(&mut self, d2: f32, id: NodeId) {
+    fn less(&self, a: &(f32, K), b: &(f32, K)) -> bool {
+        match a.0.total_cmp(&b.0) {
+            std::cmp::Ordering::Less => true,
+            std::cmp::Ordering::Greater => false,
+            std::cmp::Ordering::Equal => (self.before)(a.1, b.1),
+        }
+    }
+
+    pub(crate) fn offer(&mut self, d2: f32, key: K) {
         if self.m == 0 {
             return;
         }
         if self.m > SMALL_M {
-            let e = self.all.entry(id).or_insert(f32::INFINITY);
+            let e = self.all.entry(key).or_insert(f32::INFINITY);
             if d2 < *e {
                 *e = d2;
             }
@@ -120,27 +134,27 @@ impl TopNodes {
             }
             return;
         }
-        let e = (d2, id);
-        if let Some(i) = self.best.iter().position(|x| x.1 == id) {
-            if d2 >= self.best[i].0 {
+        let e = (d2, key);
+        if let Some(i) = self.small.iter().position(|x| x.1 == key) {
+            if d2 >= self.small[i].0 {
                 return;
             }
-            self.best.remove(i);
-        } else if self.best.len() == self.m && !less(&e, &self.best[self.m - 1]) {
+            self.small.remove(i);
+        } else if self.small.len() == self.m && !self.less(&e, &self.small[self.m - 1]) {
             return;
         }
-        let at = self.best.partition_point(|x| less(x, &e));
-        self.best.insert(at, e);
-        self.best.truncate(self.m);
+        let at = self.small.partition_point(|x| self.less(x, &e));
+        self.small.insert(at, e);
+        self.small.truncate(self.m);
     }
 
-    /// A squared distance beyond which nothing can enter any more (`+∞` until `m` nodes
+    /// A squared distance beyond which nothing can enter any more (`+∞` until `m` keys
     /// were seen).
     pub(crate) fn bound(&self) -> f32 {
         if self.m > SMALL_M {
             self.bound
-        } else if self.best.len() == self.m {
-            self.best[self.m - 1].0
+        } else if self.small.len() == self.m {
+            self.small[self.m - 1].0
         } else {
             f32::INFINITY
         }
@@ -151,30 +165,72 @@ impl TopNodes {
         self.m == 0 || min_d2 > self.bound()
     }
 
-    /// `(node, distance)` pairs, ascending.
-    pub(crate) fn into_vec(self) -> Vec<(NodeId, f32)> {
-        let mut best = self.best;
+    /// The best `m` `(squared distance, key)` pairs, ascending.
+    pub(crate) fn into_sorted(mut self) -> Vec<(f32, K)> {
         if self.m > SMALL_M {
-            best = self.all.into_iter().map(|(id, d2)| (d2, id)).collect();
-            best.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            best.truncate(self.m);
+            let mut all: Vec<(f32, K)> = self.all.drain().map(|(k, d2)| (d2, k)).collect();
+            all.sort_unstable_by(|a, b| {
+                if self.less(a, b) {
+                    std::cmp::Ordering::Less
+                } else if self.less(b, a) {
+                    std::cmp::Ordering::Greater
+                } else {
+                    std::cmp::Ordering::Equal
+                }
+            });
+            all.truncate(self.m);
+            return all;
         }
-        best.into_iter().map(|(d2, id)| (id, d2.sqrt())).collect()
+        self.small
     }
 }
 
-/// Offers the nodes of `index` near `c` to `top` (exactly the best `top.m` of them, and
-/// perhaps others): one branch-and-bound pass whose bound is the current `m`-th best.
+impl TopNodes {
+    /// `(node, distance)` pairs, ascending.
+    pub(crate) fn into_vec(self) -> Vec<(NodeId, f32)> {
+        self.into_sorted()
+            .into_iter()
+            .map(|(d2, id)| (id, d2.sqrt()))
+            .collect()
+    }
+}
+
+/// Offers the best `top.m` nodes of `index` near `c` to `top`: one branch-and-bound
+/// pass over items (which name nodes one to one), bounded by the current `m`-th best;
+/// an item's node is looked up only to break an exact tie and for the final `m`.
 pub(crate) fn index_nearest<I: SpatialIndex>(index: &I, c: &Point, top: &mut TopNodes) {
     if top.m == 0 {
         return;
     }
+    if top.m == 1 {
+        // The common case, without the bookkeeping of `Best`.
+        let mut best: Option<(f32, u32)> = None;
+        index.nearest_visit(c, |d2, item| {
+            let better = best.is_none_or(|(bd, bi)| {
+                d2 < bd || (d2 == bd && item != bi && index.node_of(item) < index.node_of(bi))
+            });
+            if better {
+                best = Some((d2, item));
+            }
+            best.map_or(f32::INFINITY, |b| b.0)
+        });
+        if let Some((d2, item)) = best
+            && let Some(id) = index.node_of(item)
+        {
+            top.offer(d2, id);
+        }
+        return;
+    }
+    let mut items = Best::new(top.m, |a: u32, b: u32| index.node_of(a) < index.node_of(b));
     index.nearest_visit(c, |d2, item| {
+        items.offer(d2, item);
+        items.bound()
+    });
+    for (d2, item) in items.into_sorted() {
         if let Some(id) = index.node_of(item) {
             top.offer(d2, id);
         }
-        top.bound()
-    });
+    }
 }
 
 /// Pushes the node of every point of `index` with `distance_squared <= r2`.
@@ -239,11 +295,11 @@ pub fn nearest_nodes<V: SceneView>(
     m: usize,
 ) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
     check_point(&c)?;
-    let mut top = TopNodes::new(m);
+    let mut top = top_nodes(m);
     if m == 0 {
         return Ok(Vec::new());
     }
-    for layer in scope.layers(view) {
+    for layer in view.layers().filter(|&l| scope.contains(l)) {
         if let Some(index) = view.layer_index(layer) {
             index_nearest(&index, &c, &mut top);
             continue;
@@ -312,7 +368,7 @@ pub fn nodes_within_radius<V: SceneView>(
     }
     let r2 = radius_bound(r);
     let mut out = Vec::new();
-    for layer in scope.layers(view) {
+    for layer in view.layers().filter(|&l| scope.contains(l)) {
         if let Some(index) = view.layer_index(layer) {
             index_within(&index, &c, r2, &mut out);
             continue;
@@ -378,7 +434,7 @@ pub fn nearest_in_subtree<V: SceneView>(
     m: usize,
 ) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
     check_point(&c)?;
-    let mut top = TopNodes::new(m);
+    let mut top = top_nodes(m);
     let Some(r) = view.node(root) else {
         return Ok(Vec::new());
     };
@@ -436,7 +492,7 @@ pub fn nearest_in_index<I: SpatialIndex>(
     m: usize,
 ) -> Result<Vec<(NodeId, f32)>, SpatialQueryError> {
     check_point(&c)?;
-    let mut top = TopNodes::new(m);
+    let mut top = top_nodes(m);
     index_nearest(index, &c, &mut top);
     Ok(top.into_vec())
 }
@@ -507,7 +563,7 @@ mod tests {
     #[test]
     fn top_nodes_keeps_each_node_once_with_its_smallest_distance() {
         for m in [2, 40] {
-            let mut t = TopNodes::new(m);
+            let mut t = top_nodes(m);
             t.offer(4.0, NodeId(1));
             t.offer(1.0, NodeId(1));
             t.offer(9.0, NodeId(1));
@@ -518,7 +574,7 @@ mod tests {
 
     #[test]
     fn top_nodes_orders_by_distance_then_id() {
-        let mut t = TopNodes::new(2);
+        let mut t = top_nodes(2);
         t.offer(1.0, NodeId(5));
         t.offer(1.0, NodeId(3));
         t.offer(1.0, NodeId(4));
