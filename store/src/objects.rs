@@ -56,6 +56,7 @@ use crate::layout::object_mesh_layers;
 use crate::query::{self, ConeView, SpatialQueryError};
 use crate::{Aabb, LayerId, NodeId, Point, SceneView, Scope};
 use rustc_hash::FxHashSet;
+use std::sync::OnceLock;
 
 /// Why an object query refused its input. Object queries never panic on bad input.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -246,11 +247,44 @@ fn brief(v: &serde_json::Value) -> String {
     }
 }
 
-/// An object with claimed geometry: its id and a box around that geometry (when known).
-#[derive(Clone, Copy, Debug)]
-struct Claimant {
+/// An object with claimed geometry: its id, a box around that geometry (when known),
+/// and its mesh nodes when there are few of them (see [`MAX_PART_CHILDREN`]).
+#[derive(Clone, Debug)]
+struct Claimant<R> {
     id: NodeId,
     bbox: Option<Aabb>,
+    mesh: Vec<R>,
+}
+
+/// Objects with more mesh children than this (saffron's one node per vertex) get no
+/// part boxes when they keep a box of their own: finding their points would cost a
+/// node lookup per vertex.
+const MAX_PART_CHILDREN: usize = 8;
+
+/// The points of `sets` split into the octants around the centre of `around` (a box
+/// holding them all), as the boxes of the non-empty octants: each holds its points
+/// exactly, so each holds at least one point and together they hold all.
+fn octant_boxes(sets: &[&[Point]], around: &Aabb) -> Vec<Aabb> {
+    let centre = [0, 1, 2].map(|a| around.min[a] + (around.max[a] - around.min[a]) / 2.0);
+    let mut parts = [Aabb {
+        min: [f32::INFINITY; 3],
+        max: [f32::NEG_INFINITY; 3],
+    }; 8];
+    for p in sets.iter().flat_map(|s| s.iter()) {
+        let octant = usize::from(p[0] > centre[0])
+            | usize::from(p[1] > centre[1]) << 1
+            | usize::from(p[2] > centre[2]) << 2;
+        let b = &mut parts[octant];
+        for ((lo, hi), &c) in b.min.iter_mut().zip(&mut b.max).zip(p) {
+            if c < *lo {
+                *lo = c;
+            }
+            if c > *hi {
+                *hi = c;
+            }
+        }
+    }
+    parts.into_iter().filter(|b| b.min[0] <= b.max[0]).collect()
 }
 
 /// The object queries over one view of a scene built by [`crate::layout::build`].
@@ -267,7 +301,10 @@ pub struct Objects<'a, V: SceneView> {
     /// A box around every point of each mesh layer (same order; `None` when empty).
     layer_boxes: Vec<Option<Aabb>>,
     /// Objects with at least one mesh node, ascending by id.
-    claimants: Vec<Claimant>,
+    claimants: Vec<Claimant<V::NodeRef<'a>>>,
+    /// Part boxes of each claimant (same order; empty when not kept), computed by the
+    /// first visibility query.
+    parts: OnceLock<Vec<Vec<Aabb>>>,
     /// The ids of `claimants`.
     claimant_ids: FxHashSet<NodeId>,
 }
@@ -287,7 +324,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// of `view`.
     ///
     /// # Complexity
-    /// O(layers + objects + their children) for the object layers, plus one pass over
+    /// O(layers + objects + their children) for the object layers, and one pass over
     /// the mesh layers' nodes for a box around each layer (their boxes where the layout
     /// keeps them, their points otherwise).
     pub fn new(view: &'a V) -> Self {
@@ -309,21 +346,20 @@ impl<'a, V: SceneView> Objects<'a, V> {
         let mut claimants = Vec::new();
         for &layer in &object_layers {
             for n in view.layer_nodes(layer) {
-                let mesh: Vec<V::NodeRef<'a>> = view
-                    .children(n)
+                // Every mesh child when there are few of them (one per object except in
+                // saffron) or the object keeps no box; else the first, to know it has one.
+                let children = view.children(n);
+                let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
+                let mesh: Vec<V::NodeRef<'a>> = children
                     .iter()
                     .filter_map(|&c| view.node(c))
                     .filter(|&c| mesh_layers.binary_search(&view.node_layer(c)).is_ok())
-                    .take(if view.aabb(n).is_some() {
-                        1
-                    } else {
-                        usize::MAX
-                    })
+                    .take(if all { usize::MAX } else { 1 })
                     .collect();
                 if mesh.is_empty() {
                     continue;
                 }
-                // The object's own box (mint, saffron) holds its whole sub-tree; else a
+                // The object's own box (mint, saffron) holds its whole sub-tree; else the
                 // box around its mesh nodes' points.
                 let bbox = view.aabb(n).or_else(|| {
                     mesh.iter()
@@ -333,6 +369,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                 claimants.push(Claimant {
                     id: view.node_id(n),
                     bbox,
+                    mesh: if all { mesh } else { Vec::new() },
                 });
             }
         }
@@ -353,6 +390,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
             mesh_layers,
             layer_boxes,
             claimants,
+            parts: OnceLock::new(),
             claimant_ids,
         }
     }
@@ -505,11 +543,12 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// [`ObjectQueryError::InvalidHalfAngleDeg`] outside `[0, 180]`.
     ///
     /// # Complexity
-    /// Classifies each object's box against the cone, with margins far above rounding:
-    /// a box clearly outside is skipped, a box clearly inside answers yes (it holds at
-    /// least one claimed vertex), and only for boxes across the cone's boundary runs
-    /// [`crate::query::visible`] from the object (a kd-tree search over a ball around the
-    /// cone where the object has a node index, a scan of its vertices otherwise).
+    /// Classifies each object's box, then its up to eight part boxes (computed by the
+    /// first call, one pass over the claimed vertices), against the cone with margins far above rounding: a box
+    /// clearly outside rules its vertices out, a non-empty box clearly inside answers
+    /// yes. Only an object that neither settles runs [`crate::query::visible`] (a
+    /// kd-tree search over a ball around the cone where the object has a node index, a
+    /// scan of its vertices otherwise).
     pub fn visible_objects(
         &self,
         eye: Point,
@@ -519,8 +558,21 @@ impl<'a, V: SceneView> Objects<'a, V> {
     ) -> Result<Vec<NodeId>, ObjectQueryError> {
         let cone = cone_view(eye, dir, half_angle_deg, range)?;
         let reach = Reach::new(&cone);
+        let parts = self.parts.get_or_init(|| {
+            self.claimants
+                .iter()
+                .map(|c| match (&c.bbox, c.mesh.is_empty()) {
+                    (Some(around), false) => {
+                        let sets: Vec<&[Point]> =
+                            c.mesh.iter().map(|&m| self.view.points(m)).collect();
+                        octant_boxes(&sets, around)
+                    }
+                    _ => Vec::new(),
+                })
+                .collect()
+        });
         let mut out = Vec::new();
-        for c in &self.claimants {
+        for (c, parts) in self.claimants.iter().zip(parts) {
             match c.bbox.map(|b| reach.classify(&b)) {
                 Some(Sight::Outside) => continue,
                 // The box holds the object's claimed vertices, and lies inside the cone.
@@ -529,6 +581,27 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     continue;
                 }
                 Some(Sight::Maybe) | None => {}
+            }
+            // The same with the part boxes: one inside proves a visible vertex (each
+            // holds one), all outside prove none.
+            if !parts.is_empty() {
+                let (mut inside, mut outside) = (false, true);
+                for p in parts {
+                    match reach.classify(p) {
+                        Sight::Inside => {
+                            inside = true;
+                            break;
+                        }
+                        Sight::Maybe => outside = false,
+                        Sight::Outside => {}
+                    }
+                }
+                if inside {
+                    out.push(c.id);
+                }
+                if inside || outside {
+                    continue;
+                }
             }
             let seen = query::visible(self.view, c.id, &cone)?;
             if seen.iter().any(|&m| self.is_mesh_node(m)) {
@@ -637,24 +710,39 @@ struct Reach {
     eye: [f64; 3],
     /// Unit direction, normalised as the cone normalises it.
     dir: [f64; 3],
-    half_angle: f64,
     range2: f64,
+    /// `cos` and `sin` of the half-angle.
+    cos_half: f64,
+    sin_half: f64,
+    /// `cos` of the half-angle less [`Reach::ANGLE_MARGIN`], when that narrower cone is
+    /// convex and not degenerate (for [`Reach::holds`]).
+    cos_narrow: Option<f64>,
+    /// The squared range less a relative 1e-6 (for [`Reach::holds`]).
+    range2_short: f64,
 }
 
 impl Reach {
-    /// Margin (radians) far above the rounding of the angle computations (about 1e-8
-    /// near 0, where `acos` is worst conditioned), so that a box is skipped only when it
-    /// is clearly outside.
+    /// Margin (radians, and relative distance) far above the rounding of the cone's
+    /// test and of these tests (about 1e-8 at worst), so that a box is classified only
+    /// when it is clearly outside or inside.
     const ANGLE_MARGIN: f64 = 1e-5;
 
     fn new(cone: &ConeView) -> Self {
         let d = cone.dir.map(f64::from);
         let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let half = f64::from(cone.half_angle);
+        let narrow = half - Self::ANGLE_MARGIN;
+        let range2 = f64::from(cone.range) * f64::from(cone.range);
         Reach {
             eye: cone.eye.map(f64::from),
-            dir: d.map(|v| v / norm),
-            half_angle: f64::from(cone.half_angle),
-            range2: f64::from(cone.range) * f64::from(cone.range),
+            dir: [d[0] / norm, d[1] / norm, d[2] / norm],
+            range2,
+            cos_half: half.cos(),
+            sin_half: half.sin(),
+            cos_narrow: (1e-4..=std::f64::consts::FRAC_PI_2 - 1e-4)
+                .contains(&narrow)
+                .then(|| narrow.cos()),
+            range2_short: range2 * (1.0 - 1e-6) * (1.0 - 1e-6),
         }
     }
 
@@ -673,23 +761,21 @@ impl Reach {
     /// its eight corners; the corners are tested against a cone narrower by
     /// [`Reach::ANGLE_MARGIN`] and shorter by a relative 1e-6.
     fn holds(&self, b: &Aabb) -> bool {
-        let h = self.half_angle - Self::ANGLE_MARGIN;
-        if !(1e-4..=std::f64::consts::FRAC_PI_2 - 1e-4).contains(&h) {
+        let Some(cos_h) = self.cos_narrow else {
             return false;
-        }
-        let cos_h = h.cos();
-        let r2 = self.range2 * (1.0 - 1e-6) * (1.0 - 1e-6);
-        (0..8).all(|corner: u32| {
-            let v = [0, 1, 2].map(|a| {
+        };
+        (0..8u32).all(|corner| {
+            let pick = |a: usize| {
                 let c = if corner >> a & 1 == 1 {
                     b.max[a]
                 } else {
                     b.min[a]
                 };
                 f64::from(c) - self.eye[a]
-            });
+            };
+            let v = [pick(0), pick(1), pick(2)];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if d2 > r2 {
+            if d2 > self.range2_short {
                 return false;
             }
             let dot = v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2];
@@ -697,30 +783,30 @@ impl Reach {
         })
     }
 
+    /// Whether some point of the box may be inside the cone (false only when provably
+    /// none is).
     fn may_see(&self, b: &Aabb) -> bool {
         // Range: the box's closest point is farther than the range.
         if box_distance2(b, &self.eye) > self.range2 {
             return false;
         }
-        if self.half_angle + Self::ANGLE_MARGIN >= std::f64::consts::PI {
-            return true;
+        // Angle: the ball around the box (centre c, radius rho) against the cone. With
+        // v = c - eye split into `axial` along the direction and `radial` across it,
+        // every point outside the cone at angle theta > half from the axis lies at least
+        // |v| sin(theta - half) = radial cos(half) - axial sin(half) from the cone, so a
+        // ball whose centre is farther than rho (plus a margin) from it lies outside.
+        let mut v = [0.0; 3];
+        let mut rho2 = 0.0;
+        for (a, va) in v.iter_mut().enumerate() {
+            let (lo, hi) = (f64::from(b.min[a]), f64::from(b.max[a]));
+            *va = (lo + hi) / 2.0 - self.eye[a];
+            rho2 += (hi - lo) * (hi - lo) / 4.0;
         }
-        // Angle: the ball around the box, seen from the eye, subtends `alpha` around
-        // its centre's direction `theta`; every point of the box is at an angle of at
-        // least `theta - alpha` from the view direction.
-        let centre = [0, 1, 2].map(|a| (f64::from(b.min[a]) + f64::from(b.max[a])) / 2.0);
-        let half = [0, 1, 2].map(|a| (f64::from(b.max[a]) - f64::from(b.min[a])) / 2.0);
-        let rho = (half[0] * half[0] + half[1] * half[1] + half[2] * half[2]).sqrt() * (1.0 + 1e-9);
-        let v = [0, 1, 2].map(|a| centre[a] - self.eye[a]);
-        let dist = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        if dist <= rho * (1.0 + 1e-9) || dist == 0.0 {
-            return true;
-        }
-        let cos_theta = ((v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2]) / dist)
-            .clamp(-1.0, 1.0);
-        let theta = cos_theta.acos();
-        let alpha = (rho / dist).min(1.0).asin();
-        theta - alpha <= self.half_angle + Self::ANGLE_MARGIN
+        let len2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        let axial = v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2];
+        let radial = (len2 - axial * axial).max(0.0).sqrt();
+        let gap = radial * self.cos_half - axial * self.sin_half;
+        gap <= rho2.sqrt() * (1.0 + 1e-9) + Self::ANGLE_MARGIN * len2.sqrt()
     }
 }
 
