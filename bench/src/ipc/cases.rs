@@ -1015,3 +1015,38 @@ fn method_notes(ctx: &Ctx) -> Vec<String> {
     }
     notes
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_skipped_publish_is_timed_to_the_newer_snapshot() {
+        let publish = |generation, t0| Publish {
+            generation,
+            t0,
+            t1: t0 + 10,
+            layers_sent: 1,
+            layers_total: 1,
+            bytes: 100,
+        };
+        let publishes = [publish(1, 1_000), publish(2, 2_000), publish(3, 3_000)];
+        // Reader 0 saw every publish; reader 1 skipped generation 2.
+        let r0: Seen = [
+            (1, [1_005, 1_100, 1_200]),
+            (2, [2_005, 2_100, 2_200]),
+            (3, [3_005, 3_100, 3_200]),
+        ]
+        .into_iter()
+        .collect();
+        let r1: Seen = [(1, [1_005, 1_300, 1_400]), (3, [3_005, 3_500, 3_600])]
+            .into_iter()
+            .collect();
+        let o = observe(&publishes, &[r0, r1]);
+        assert_eq!((o.coalesced, o.unseen), (1, 0));
+        // Generation 2 became visible to reader 1 with generation 3, at 3_500.
+        assert_eq!(o.all_visible, vec![300.0, 1_500.0, 500.0]);
+        assert_eq!(o.all_answered, vec![400.0, 1_600.0, 600.0]);
+        assert_eq!(o.visible.len(), 6);
+    }
+}

@@ -498,3 +498,64 @@ pub fn fmt_bytes(b: f64) -> String {
         format!("{b:.0} B")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_and_p99_use_nearest_rank() {
+        let ns: Vec<f64> = (1..=100).map(f64::from).collect();
+        let (m, p) = median_p99_us(&ns);
+        assert_eq!((m, p), (0.05, 0.099));
+        assert!(median_p99_us(&[]).0.is_nan());
+        assert_eq!(median_p99_us(&[7000.0]), (7.0, 7.0));
+    }
+
+    #[test]
+    fn rounds_merge_by_median_and_add_samples() {
+        let row = |m: f64, v: f64| Row {
+            case: "c".into(),
+            median_us: m,
+            p99_us: 2.0 * m,
+            samples: 10,
+            value: Some(v),
+            extra: vec![("x".into(), m)],
+            ..Row::default()
+        };
+        let merged = aggregate(&[
+            vec![row(1.0, 5.0)],
+            vec![row(3.0, 7.0)],
+            vec![row(2.0, 9.0)],
+        ]);
+        assert_eq!(merged.len(), 1);
+        let r = &merged[0];
+        assert_eq!(
+            (r.median_us, r.p99_us, r.value, r.samples),
+            (2.0, 4.0, Some(7.0), 30)
+        );
+        assert_eq!(r.get("x"), Some(2.0));
+        assert_eq!(r.rounds.len(), 3);
+    }
+
+    #[test]
+    fn json_has_the_required_fields() {
+        let meta = Meta {
+            machine: json!({"cores": 2}),
+            machine_end: json!({}),
+            quick: true,
+            rounds: 1,
+            duration_s: 1.0,
+            leftovers: Vec::new(),
+            notes: Vec::new(),
+            findings: Vec::new(),
+            command: String::new(),
+        };
+        let rows = [Row::latency("readers_1", "", &[1000.0, 2000.0])];
+        let v = to_json(&meta, &rows, &targets(&rows));
+        assert_eq!(v["machine"]["cores"], 2);
+        assert_eq!(v["rows"][0]["case"], "readers_1");
+        assert!(v["rows"][0]["median_us"].is_number());
+        assert!(v["rows"][0]["p99_us"].is_number());
+    }
+}
