@@ -197,7 +197,10 @@ pub fn run(args: &IpcArgs) -> Res<()> {
         leftovers: ctx.leftovers.clone(),
         notes: method_notes(&ctx),
         findings: findings(),
-        command: std::env::args().collect::<Vec<_>>().join(" "),
+        command: std::iter::once("ygg-bench".to_owned())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" "),
     };
     let json = serde_json::to_string_pretty(&report::to_json(&meta, &rows, &targets))?;
     let md = report::to_markdown(&meta, &rows, &targets);
