@@ -128,5 +128,42 @@ fn tempfile_dir() -> std::path::PathBuf {
     dir
 }
 
-criterion_group!(benches, updates, labels, open);
+/// The writer's per-layer publish work and the reader's per-layer validation, on the
+/// office's places layer (1,130 nodes with edges and nesting).
+fn segments(c: &mut Criterion) {
+    let dsg = ygg_store::dsg::office::generate(ygg_store::dsg::office::OfficeParams {
+        seed: 7,
+        scale: 1.0,
+    });
+    let g = ygg_store::layout::build(&dsg, ygg_store::layout::Layout::Mint).unwrap();
+    let mut group = c.benchmark_group("segment");
+    for name in ["PLACES", "AGENTS"] {
+        let layer = g.layer_id(name).unwrap();
+        let segment = g.layer_segment(layer);
+        let len = segment.archived_len();
+        let mut buf = ygg_store::snapshot::SegmentBytes::with_capacity(len);
+        buf.resize(len, 0);
+        group.bench_function(format!("build/{name}"), |b| {
+            b.iter(|| g.layer_segment(layer))
+        });
+        group.bench_function(format!("archived_len/{name}"), |b| {
+            b.iter(|| segment.archived_len())
+        });
+        group.bench_function(format!("archive_into/{name}"), |b| {
+            b.iter(|| segment.archive_into(&mut buf).unwrap())
+        });
+        segment.archive_into(&mut buf).unwrap();
+        group.bench_function(format!("validate/{name}"), |b| {
+            b.iter(|| {
+                ygg_store::snapshot::validate_layer(&buf, name)
+                    .unwrap()
+                    .ids
+                    .len()
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, updates, labels, open, segments);
 criterion_main!(benches);

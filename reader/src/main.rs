@@ -1,7 +1,12 @@
 //! `ygg-reader`: command-line front end of the reader.
 
+mod inspect;
+mod query_cli;
+
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
+
+mod roles;
 
 use clap::{Parser, Subcommand};
 use ygg_reader::{
@@ -25,6 +30,15 @@ enum Command {
     Watch(Watch),
     /// Print the current snapshot once and exit.
     Dump(Dump),
+    /// Run a demo consumer (planner, visibility, labels) on a live scene, printing JSON
+    /// progress and a summary line.
+    Role(roles::RoleArgs),
+    /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
+    /// or the paper's static table of the layouts of a Spark-DSG JSON file.
+    Inspect(inspect::InspectArgs),
+    /// Answer JSON-line object queries on a `.ygg` file or a live scene (one line out per
+    /// line in).
+    Query(query_cli::QueryArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -72,6 +86,13 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
+        Command::Role(args) => roles::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Inspect(args) => inspect::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Query(args) => query_cli::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
     };
     match result {
         Ok(code) => code,

@@ -119,8 +119,9 @@ impl SceneGraph {
     /// Keeps boxes exact after `id`'s points changed from `old` to its current points.
     pub(crate) fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
         if self.any_box_at_or_above(id) {
-            let new = self.nodes[&id].points.clone();
-            self.update_boxes(id, old, &new);
+            let (removed, added) = crate::id::changed_points(old, &self.nodes[&id].points);
+            let (removed, added) = (removed.to_vec(), added.to_vec());
+            self.update_boxes(id, &removed, &added);
         }
     }
 

@@ -122,3 +122,42 @@ impl Aabb {
         }
     }
 }
+
+/// The parts of two point lists that differ: `old` and `new` without their common
+/// prefix and suffix (points compared bit for bit). Moving one point of a node, or
+/// appending points to it, then costs index and box updates for those points only.
+pub(crate) fn changed_points<'a>(old: &'a [Point], new: &'a [Point]) -> (&'a [Point], &'a [Point]) {
+    let same = |a: &Point, b: &Point| a.map(f32::to_bits) == b.map(f32::to_bits);
+    let prefix = old.iter().zip(new).take_while(|(a, b)| same(a, b)).count();
+    let (old, new) = (&old[prefix..], &new[prefix..]);
+    let suffix = old
+        .iter()
+        .rev()
+        .zip(new.iter().rev())
+        .take_while(|(a, b)| same(a, b))
+        .count();
+    (&old[..old.len() - suffix], &new[..new.len() - suffix])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn changed_points_trims_common_prefix_and_suffix() {
+        let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        let moved = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert_eq!(changed_points(&a, &moved), (&a[1..2], &moved[1..2]));
+        let appended = [a[0], a[1], a[2], [3.0, 0.0, 0.0]];
+        let (r, n) = changed_points(&a, &appended);
+        assert!(r.is_empty());
+        assert_eq!(n, &appended[3..]);
+        let (r, n) = changed_points(&a, &a);
+        assert!(r.is_empty() && n.is_empty());
+        let (r, n) = changed_points(&a, &[]);
+        assert_eq!((r.len(), n.len()), (3, 0));
+        // -0.0 and 0.0 differ bit for bit: both are updated.
+        let signed = [[-0.0, 0.0, 0.0], a[1], a[2]];
+        assert_eq!(changed_points(&a, &signed).0.len(), 1);
+    }
+}

@@ -6,6 +6,7 @@
 //! * See [`query`] for the queries, written once over [`SceneView`].
 //! * See [`index`] for the spatial indexes (live, archived, reader-built) behind the
 //!   spatial queries.
+//! * See [`objects`] for the object-level queries of the command line's query contract.
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file.
 
 #[cfg(not(target_endian = "little"))]
@@ -20,6 +21,7 @@ mod id;
 pub mod index;
 pub mod layout;
 mod live_view;
+pub mod objects;
 pub mod query;
 pub mod snapshot;
 mod view;

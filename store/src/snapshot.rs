@@ -174,7 +174,7 @@ pub struct Manifest {
 // ---- archiving the live graph ---------------------------------------------------------
 
 struct StringTable {
-    index: HashMap<u32, u32>,
+    index: rustc_hash::FxHashMap<u32, u32>,
     strings: Vec<String>,
 }
 
@@ -202,7 +202,7 @@ impl SceneGraph {
         ids.sort_unstable();
         let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         let mut st = StringTable {
-            index: HashMap::new(),
+            index: rustc_hash::FxHashMap::default(),
             strings: Vec::new(),
         };
         let mut s = LayerSegment {
@@ -224,8 +224,8 @@ impl SceneGraph {
             o.push(0);
         }
         s.parents.reserve(ids.len());
-        let mut label_rows: HashMap<u32, Vec<u32>> = HashMap::new();
-        let mut key_rows: HashMap<u32, Vec<u32>> = HashMap::new();
+        let mut label_rows: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        let mut key_rows: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
         for (row, &id) in ids.iter().enumerate() {
             let n = &self.nodes[&NodeId(id)];
             s.points.extend_from_slice(&n.points);
@@ -657,6 +657,15 @@ impl SnapshotFile {
     /// Whether the file is empty (never true for an opened snapshot).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Bytes of each segment: the manifest's, then every layer segment's in manifest
+    /// order (ascending layer id, as [`SceneView::layers`] lists them).
+    pub fn segment_sizes(&self) -> (usize, Vec<usize>) {
+        (
+            self.manifest.len(),
+            self.layers.iter().map(|r| r.len()).collect(),
+        )
     }
 }
 

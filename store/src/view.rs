@@ -138,7 +138,7 @@ impl SpatialIndex for NoIndex {
         match *self {}
     }
 
-    fn nearest_points(&self, _c: &Point, _k: usize, _out: &mut Vec<(f32, u32)>) {
+    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, _c: &Point, _f: F) {
         match *self {}
     }
 
@@ -148,5 +148,109 @@ impl SpatialIndex for NoIndex {
 
     fn memory_bytes(&self) -> usize {
         match *self {}
+    }
+}
+
+/// A shared reference to a view is a view (so a query target can hold `&SceneGraph`).
+impl<V: SceneView + ?Sized> SceneView for &V {
+    type NodeRef<'a>
+        = V::NodeRef<'a>
+    where
+        Self: 'a;
+
+    fn layers(&self) -> impl Iterator<Item = LayerId> + '_ {
+        (**self).layers()
+    }
+    fn layer_name(&self, layer: LayerId) -> Option<&str> {
+        (**self).layer_name(layer)
+    }
+    fn layer_by_name(&self, name: &str) -> Option<LayerId> {
+        (**self).layer_by_name(name)
+    }
+    fn layer_children(&self, layer: LayerId) -> Vec<LayerId> {
+        (**self).layer_children(layer)
+    }
+    fn layer_parents(&self, layer: LayerId) -> Vec<LayerId> {
+        (**self).layer_parents(layer)
+    }
+    fn layer_len(&self, layer: LayerId) -> usize {
+        (**self).layer_len(layer)
+    }
+    fn layer_nodes(&self, layer: LayerId) -> impl Iterator<Item = Self::NodeRef<'_>> + '_ {
+        (**self).layer_nodes(layer)
+    }
+    fn node(&self, id: NodeId) -> Option<Self::NodeRef<'_>> {
+        (**self).node(id)
+    }
+    fn node_id<'a>(&'a self, node: Self::NodeRef<'a>) -> NodeId {
+        (**self).node_id(node)
+    }
+    fn node_layer<'a>(&'a self, node: Self::NodeRef<'a>) -> LayerId {
+        (**self).node_layer(node)
+    }
+    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [Point] {
+        (**self).points(node)
+    }
+    fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId> {
+        (**self).parent(node)
+    }
+    fn children<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [NodeId] {
+        (**self).children(node)
+    }
+    fn aabb<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<Aabb> {
+        (**self).aabb(node)
+    }
+    fn out_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a {
+        (**self).out_edges(node)
+    }
+    fn in_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a {
+        (**self).in_edges(node)
+    }
+    fn labels<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = &'a str> + 'a {
+        (**self).labels(node)
+    }
+    fn features<'a>(
+        &'a self,
+        node: Self::NodeRef<'a>,
+    ) -> impl Iterator<Item = (&'a str, FeatureRef<'a>)> + 'a {
+        (**self).features(node)
+    }
+    fn layers_with_label(&self, label: &str) -> impl Iterator<Item = LayerId> {
+        (**self).layers_with_label(label)
+    }
+    fn layers_with_key(&self, key: &str) -> impl Iterator<Item = LayerId> {
+        (**self).layers_with_key(key)
+    }
+    fn nodes_with_label<'a>(
+        &'a self,
+        layer: LayerId,
+        label: &str,
+    ) -> impl Iterator<Item = Self::NodeRef<'a>> {
+        (**self).nodes_with_label(layer, label)
+    }
+    fn nodes_with_key<'a>(
+        &'a self,
+        layer: LayerId,
+        key: &str,
+    ) -> impl Iterator<Item = Self::NodeRef<'a>> {
+        (**self).nodes_with_key(layer, key)
+    }
+    fn feature<'a>(&'a self, node: Self::NodeRef<'a>, key: &str) -> Option<FeatureRef<'a>> {
+        (**self).feature(node, key)
+    }
+    fn has_label<'a>(&'a self, node: Self::NodeRef<'a>, label: &str) -> bool {
+        (**self).has_label(node, label)
+    }
+    fn node_count(&self) -> usize {
+        (**self).node_count()
+    }
+    fn layer_generation(&self, layer: LayerId) -> Option<u64> {
+        (**self).layer_generation(layer)
+    }
+    fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
+        (**self).layer_index(layer)
+    }
+    fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
+        (**self).node_index(node)
     }
 }

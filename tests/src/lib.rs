@@ -70,7 +70,16 @@ fn build_binaries(cargo: &Path, profile_dir: &Path) {
         return;
     };
     let mut command = Command::new(cargo);
-    command.args(["build", "-p", "ygg-writer", "-p", "ygg-reader", "--bins"]);
+    command.args([
+        "build",
+        "-p",
+        "ygg-writer",
+        "-p",
+        "ygg-reader",
+        "-p",
+        "ygg-bench",
+        "--bins",
+    ]);
     match profile_dir.file_name().and_then(|n| n.to_str()) {
         Some("debug") | None => {}
         Some("release") => {

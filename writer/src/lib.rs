@@ -26,3 +26,4 @@ pub use ygg_reader::protocol::ManifestEntry;
 mod scene;
 #[doc(inline)]
 pub use scene::{PublishReport, SceneWriter, unix_ns};
+pub mod replay;

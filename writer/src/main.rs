@@ -3,6 +3,8 @@
 //! `serve-test` is a temporary driver that publishes synthetic segments; the real `serve`
 //! (publishing a scene graph) replaces it once the store lands.
 
+mod import;
+
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -29,6 +31,42 @@ enum Command {
     /// Publishes every layer once, then on each tick changes one layer (round robin) and
     /// publishes a new manifest. Exits cleanly, removing its shared memory, on SIGINT/SIGTERM.
     ServeTest(ServeTest),
+    /// Serve a scene (a `.ygg` file or the built-in office) under a scene name, and
+    /// optionally replay a SLAM-like stream of updates at a given rate.
+    ///
+    /// Prints one JSON line per second (`{"event":"progress",...}`) and a final
+    /// `{"event":"summary",...}` line. Exits cleanly, removing its shared memory, on
+    /// SIGINT/SIGTERM or after --seconds.
+    Serve(Serve),
+    /// Import a Spark-DSG JSON file (.json or .json.gz) into a `.ygg` snapshot in one of
+    /// the paper's layouts, with a progress bar.
+    Import(import::ImportArgs),
+}
+
+#[derive(Parser, Debug)]
+struct Serve {
+    /// Scene name (ASCII letters, digits, '-', '_', '.').
+    #[arg(long)]
+    scene: String,
+    /// A `.ygg` snapshot to serve; default: the built-in office.
+    #[arg(long)]
+    file: Option<std::path::PathBuf>,
+    /// Scale of the built-in office.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Layout of the built-in office (vanilla, chocolate, mint, saffron).
+    #[arg(long, default_value = "mint")]
+    layout: ygg_store::layout::Layout,
+    /// Update ticks per second (agent poses, object moves, mesh growth); 0 serves the
+    /// scene unchanged.
+    #[arg(long, default_value_t = 30.0)]
+    rate: f64,
+    /// Stop after this many seconds; default: run until signalled.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Readers the scene supports at once.
+    #[arg(long, default_value_t = ygg_reader::protocol::DEFAULT_MAX_READERS)]
+    max_readers: usize,
 }
 
 #[derive(Parser, Debug)]
@@ -68,6 +106,8 @@ fn main() -> ExitCode {
     let _ = ygg_reader::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
+        Command::Serve(args) => serve(&args),
+        Command::Import(args) => import::run(&args).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -167,4 +207,121 @@ fn publish_test_layer(
     writer.publish_layer(layer, generation, bytes, |buf| {
         test_pattern::write(buf, layer, generation);
     })
+}
+
+fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
+    use std::time::Instant;
+    use ygg_store::{SceneView, SnapshotFile};
+    use ygg_writer::SceneWriter;
+    use ygg_writer::replay::SlamReplay;
+    if !(args.rate.is_finite() && args.rate >= 0.0) {
+        return Err("--rate must be a non-negative number".into());
+    }
+    if args.seconds.is_some_and(|s| !(s.is_finite() && s > 0.0)) {
+        return Err("--seconds must be a positive number".into());
+    }
+    let t = Instant::now();
+    let graph = match &args.file {
+        Some(path) => {
+            let file = SnapshotFile::open(path)?;
+            let view = file.view();
+            let all: Vec<ygg_store::NodeId> = view
+                .layers()
+                .flat_map(|l| {
+                    view.layer_nodes(l)
+                        .map(|n| view.node_id(n))
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            ygg_store::query::subgraph(&view, &all)
+        }
+        None => {
+            let dsg = ygg_store::dsg::office::generate(ygg_store::dsg::office::OfficeParams {
+                seed: 7,
+                scale: args.scale,
+            });
+            ygg_store::layout::build(&dsg, args.layout)?
+        }
+    };
+    let loaded = t.elapsed();
+    let publisher = WriterBuilder::new(&args.scene)
+        .max_readers(args.max_readers)
+        .create()?;
+    let mut writer = SceneWriter::with_publisher(publisher, graph);
+    let mut replay = SlamReplay::new(writer.graph(), 7);
+    let first = writer.publish()?;
+    println!(
+        "{}",
+        serde_json::json!({"event": "ready", "scene": args.scene, "nodes": writer.graph().node_count(),
+            "load_ms": loaded.as_secs_f64() * 1e3, "first_publish_bytes": first.bytes_sent})
+    );
+    let period = if args.rate > 0.0 {
+        Duration::from_secs_f64(1.0 / args.rate)
+    } else {
+        Duration::from_millis(200)
+    };
+    let start = Instant::now();
+    let mut next = start + period;
+    let (mut ticks, mut update_ns, mut publish_ns, mut bytes) = (0u64, 0u128, 0u128, 0usize);
+    let mut last_report = start;
+    let stop_reason = loop {
+        if args
+            .seconds
+            .is_some_and(|s| start.elapsed().as_secs_f64() >= s)
+        {
+            break "time limit".to_owned();
+        }
+        if args.rate > 0.0 {
+            let t0 = Instant::now();
+            replay.step(writer.graph_mut())?;
+            let t1 = Instant::now();
+            let r = writer.publish()?;
+            update_ns += (t1 - t0).as_nanos();
+            publish_ns += t1.elapsed().as_nanos();
+            bytes += r.bytes_sent;
+            ticks += 1;
+        }
+        if last_report.elapsed() >= Duration::from_secs(1) {
+            last_report = Instant::now();
+            println!(
+                "{}",
+                serde_json::json!({"event": "progress", "generation": writer.generation(), "ticks": ticks,
+                    "nodes": writer.graph().node_count(), "seconds": start.elapsed().as_secs_f64()})
+            );
+        }
+        let now = Instant::now();
+        let wait = next.saturating_duration_since(now);
+        next = next.max(now) + period;
+        if let Err(e) = writer.publisher().wait(wait) {
+            break e.to_string();
+        }
+    };
+    let secs = start.elapsed().as_secs_f64();
+    let per = |ns: u128| {
+        if ticks == 0 {
+            0.0
+        } else {
+            ns as f64 / ticks as f64 / 1e3
+        }
+    };
+    println!(
+        "{}",
+        serde_json::json!({"event": "summary", "stop": stop_reason, "ticks": ticks, "seconds": secs,
+            "updates_per_s": ticks as f64 / secs, "update_us": per(update_ns), "publish_us": per(publish_ns),
+            "bytes_published": bytes, "generation": writer.generation(), "nodes": writer.graph().node_count(),
+            "rss_mb": rss_mb()})
+    );
+    Ok(())
+}
+
+/// Resident memory of this process, MB (0 where /proc is unavailable).
+fn rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/statm")
+        .ok()
+        .and_then(|s| {
+            s.split_whitespace()
+                .nth(1)
+                .and_then(|p| p.parse::<f64>().ok())
+        })
+        .map_or(0.0, |pages| pages * 4096.0 / 1e6)
 }

@@ -278,6 +278,7 @@ fn after_update_local(
                     )
                 })
                 .collect();
+        let scopes = ygg::Scopes::new(&*g);
         let mut samples = Vec::with_capacity(n);
         for i in 0..n {
             let t = Instant::now();
@@ -295,7 +296,7 @@ fn after_update_local(
                 g.set_geometry(*m, points)
                     .expect("moving an existing mesh node");
             }
-            let target = ygg::YggTarget::new(String::new(), *l, &*g);
+            let target = ygg::YggTarget::with_scopes(String::new(), *l, &*g, scopes.clone());
             std::hint::black_box(target.answer(&q));
             samples.push(t.elapsed().as_nanos() as f64);
         }
@@ -324,8 +325,9 @@ fn spark_dsg_anchor(
     let input = match &args.dsg {
         Some(p) => p.clone(),
         None => {
-            let _ = dsg;
-            return Err("the built-in office has no JSON export yet: pass --dsg FILE".into());
+            let p = dir.join("office.json");
+            dsg::write_json(dsg, &p)?;
+            p
         }
     };
     let wpath = dir.join("workload.json");

@@ -12,25 +12,23 @@ use ygg_store::{LayerId, NodeId, SceneView, Scope};
 
 /// Where a room's objects live in a per-room layout.
 #[derive(Clone, Copy)]
-struct RoomScope {
+pub struct RoomScope {
     /// The room's claimed-mesh layer.
     mesh_layer: LayerId,
     /// The room's "claimed" group node (parent of its objects).
     claimed: NodeId,
 }
 
-/// One Yggdrasil rung over any view (the live graph or an archived snapshot).
-pub struct YggTarget<'a, V: SceneView> {
-    name: String,
-    layout: Layout,
-    view: &'a V,
+/// The per-room query scopes of a scene, found once from layer names.
+#[derive(Clone, Default)]
+pub struct Scopes {
     rooms: FxHashMap<u64, RoomScope>,
     mesh_layer: Option<LayerId>,
 }
 
-impl<'a, V: SceneView> YggTarget<'a, V> {
-    /// Wraps a view built with `layout`.
-    pub fn new(name: String, layout: Layout, view: &'a V) -> Self {
+impl Scopes {
+    /// Finds the scopes of a view built by [`layout::build`].
+    pub fn new<V: SceneView>(view: &V) -> Self {
         let mut rooms = FxHashMap::default();
         let mut mesh_layer = None;
         for (layer, room) in layout::object_mesh_layers(view) {
@@ -52,12 +50,37 @@ impl<'a, V: SceneView> YggTarget<'a, V> {
                 }
             }
         }
+        Scopes { rooms, mesh_layer }
+    }
+}
+
+/// One Yggdrasil rung over any view (the live graph or an archived snapshot).
+pub struct YggTarget<'a, V: SceneView> {
+    name: String,
+    layout: Layout,
+    view: &'a V,
+    scopes: Scopes,
+}
+
+impl<'a, V: SceneView> YggTarget<'a, V> {
+    /// Wraps a view built with `layout`.
+    pub fn new(name: String, layout: Layout, view: &'a V) -> Self {
+        let scopes = Scopes::new(view);
         YggTarget {
             name,
             layout,
             view,
-            rooms,
-            mesh_layer,
+            scopes,
+        }
+    }
+
+    /// Wraps a view whose scopes are already known (they change only with the layers).
+    pub fn with_scopes(name: String, layout: Layout, view: &'a V, scopes: Scopes) -> Self {
+        YggTarget {
+            name,
+            layout,
+            view,
+            scopes,
         }
     }
 
@@ -84,7 +107,9 @@ impl<'a, V: SceneView> YggTarget<'a, V> {
 
     /// Vanilla brute force: every mesh node whose object is in `room`, with its points.
     fn vanilla_candidates(&self, room: u64, mut f: impl FnMut(u64, &[[f32; 3]])) {
-        let Some(mesh) = self.mesh_layer else { return };
+        let Some(mesh) = self.scopes.mesh_layer else {
+            return;
+        };
         for n in self.view.layer_nodes(mesh) {
             let Some(object) = self.view.parent(n) else {
                 continue;
@@ -112,7 +137,7 @@ impl<V: SceneView> Target for YggTarget<'_, V> {
         if self.layout == Layout::Vanilla {
             return self.answer_vanilla(q);
         }
-        let scope = |room: &u64| self.rooms.get(room).copied();
+        let scope = |room: &u64| self.scopes.rooms.get(room).copied();
         match q {
             Query::Nearest { room, point } => {
                 let Some(s) = scope(room) else {

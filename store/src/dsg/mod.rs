@@ -35,6 +35,7 @@
 
 mod diag;
 mod error;
+mod export;
 mod io;
 mod json;
 mod model;
@@ -46,6 +47,8 @@ pub mod office;
 
 #[doc(inline)]
 pub use self::error::DsgImportError;
+#[doc(inline)]
+pub use self::export::{DsgExportError, to_json_bytes, write_json, write_json_to};
 #[doc(inline)]
 pub use self::io::{read_file, read_file_with_progress};
 #[doc(inline)]

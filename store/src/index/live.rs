@@ -24,12 +24,19 @@ use std::cmp::Ordering;
 
 /// Maximum entries in one leaf.
 pub(crate) const LEAF_CAP: usize = 32;
+/// Entries per leaf after a bulk build: room for a few inserts before a leaf splits.
+const BULK_FILL: usize = 28;
 const NONE: u32 = u32::MAX;
 const LEAF_BIT: u32 = 1 << 31;
-/// A sub-tree is rebuilt when one side holds more than this share of its entries.
-const BALANCE: f32 = 0.75;
-/// Sub-trees with at most this many entries are never rebuilt for balance.
-const BALANCE_MIN: u32 = 4 * LEAF_CAP as u32;
+/// Scapegoat balance: when an insert lands deeper than [`depth_limit`], the highest
+/// node on its path with more than 3/4 of its entries on one side is rebuilt.
+const BALANCE: (u64, u64) = (3, 4);
+
+/// A depth a tree of `n` entries with no unbalanced node cannot exceed:
+/// `log_{4/3}(n) + 2` (2.5 × the bit length of `n` is at least `log_{4/3}(n)`).
+fn depth_limit(n: usize) -> usize {
+    (usize::BITS - n.max(1).leading_zeros()) as usize * 5 / 2 + 2
+}
 
 /// One `(point, item)` pair.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,11 +97,11 @@ impl Leaf {
     #[inline]
     fn distances(&self, c: &Point) -> [f32; LEAF_CAP] {
         let mut d = [0.0f32; LEAF_CAP];
-        for i in 0..LEAF_CAP {
+        for (i, di) in d.iter_mut().enumerate() {
             let dx = self.xs[i] - c[0];
             let dy = self.ys[i] - c[1];
             let dz = self.zs[i] - c[2];
-            d[i] = dx * dx + dy * dy + dz * dz;
+            *di = dx * dx + dy * dy + dz * dz;
         }
         d
     }
@@ -119,6 +126,9 @@ pub struct LiveKdTree {
     free_inners: Vec<u32>,
     root: u32,
     len: usize,
+    /// The most entries since the last full rebuild (removals shrink sub-trees without
+    /// making them deeper; the whole tree is rebuilt when it halves).
+    peak: usize,
     path: Vec<u32>,
 }
 
@@ -131,6 +141,7 @@ impl Default for LiveKdTree {
             free_inners: Vec::new(),
             root: LEAF_BIT,
             len: 0,
+            peak: 0,
             path: Vec::new(),
         }
     }
@@ -148,12 +159,14 @@ fn leaf_index(r: u32) -> usize {
 /// per-axis offsets from the query are at least `off` (a point in the cell), the result
 /// is at most that point's distance (rounding is monotone).
 #[inline]
-fn cell_distance_squared(off: &[f32; 3]) -> f32 {
+pub(crate) fn cell_distance_squared(off: &[f32; 3]) -> f32 {
     off[0] * off[0] + off[1] * off[1] + off[2] * off[2]
 }
 
+/// Orders coordinates (`-0.0` before `0.0`, which `<` treats as equal: fine for
+/// selection, since both land on the same side of a `<` split).
 fn cmp_axis(a: f32, b: f32) -> Ordering {
-    a.partial_cmp(&b).unwrap_or(Ordering::Equal)
+    a.total_cmp(&b)
 }
 
 /// Moves entries satisfying `pred` to the front; returns how many there are.
@@ -168,39 +181,6 @@ fn partition(entries: &mut [Entry], pred: impl Fn(&Entry) -> bool) -> usize {
     i
 }
 
-/// The `k` best `(distance², item)` pairs seen so far, ascending.
-struct KBest<'a> {
-    k: usize,
-    out: &'a mut Vec<(f32, u32)>,
-}
-
-impl KBest<'_> {
-    #[inline]
-    fn bound(&self) -> f32 {
-        if self.out.len() < self.k {
-            f32::INFINITY
-        } else {
-            self.out[self.k - 1].0
-        }
-    }
-
-    #[inline]
-    fn full(&self) -> bool {
-        self.out.len() >= self.k
-    }
-
-    fn offer(&mut self, d: f32, item: u32) {
-        if self.full() && d >= self.bound() {
-            return;
-        }
-        let at = self.out.partition_point(|e| e.0 <= d);
-        if self.full() {
-            self.out.pop();
-        }
-        self.out.insert(at, (d, item));
-    }
-}
-
 impl LiveKdTree {
     /// An empty tree.
     pub fn new() -> Self {
@@ -209,9 +189,12 @@ impl LiveKdTree {
 
     /// A balanced tree over `entries`.
     pub(crate) fn from_entries(mut entries: Vec<Entry>) -> Self {
-        let mut t = LiveKdTree::default();
-        t.len = entries.len();
-        let leaves = entries.len().div_ceil(LEAF_CAP);
+        let mut t = LiveKdTree {
+            len: entries.len(),
+            peak: entries.len(),
+            ..LiveKdTree::default()
+        };
+        let leaves = entries.len().div_ceil(BULK_FILL);
         t.leaves.reserve_exact(leaves);
         t.inners.reserve_exact(leaves);
         t.free_leaf(0);
@@ -285,8 +268,12 @@ impl LiveKdTree {
         let mut hi = entries[0].p;
         for e in entries.iter() {
             for a in 0..3 {
-                lo[a] = lo[a].min(e.p[a]);
-                hi[a] = hi[a].max(e.p[a]);
+                if e.p[a] < lo[a] {
+                    lo[a] = e.p[a];
+                }
+                if e.p[a] > hi[a] {
+                    hi[a] = e.p[a];
+                }
             }
         }
         let dim = (0..3)
@@ -295,11 +282,11 @@ impl LiveKdTree {
         if hi[dim] - lo[dim] <= 0.0 && (0..3).all(|a| lo[a] == hi[a]) {
             return self.build_chain(entries);
         }
-        // Above two leaves, split at a multiple of the leaf size so that bulk-built
-        // leaves are full; a splitting leaf (33 entries) divides in halves.
+        // Above two leaves, split at a multiple of `BULK_FILL` so that bulk-built leaves
+        // hold `BULK_FILL` entries; a splitting leaf (33 entries) divides in halves.
         let n = entries.len();
         let mid = if n > 2 * LEAF_CAP {
-            (n / 2).div_ceil(LEAF_CAP) * LEAF_CAP
+            (n / 2 + BULK_FILL / 2) / BULK_FILL * BULK_FILL
         } else {
             n / 2
         };
@@ -420,16 +407,20 @@ impl LiveKdTree {
         self.len += 1;
         let e = Entry { p, item };
         let head = leaf_index(r) as u32;
-        let leaf = &mut self.leaves[head as usize];
-        if (leaf.len as usize) < LEAF_CAP && leaf.next == NONE {
-            leaf.push(e);
-        } else if leaf.len as usize == LEAF_CAP && leaf.next == NONE && !self.chain_equals(head, &p)
-        {
-            // A full leaf with distinct points: split it.
-            let mut entries = Vec::with_capacity(LEAF_CAP + 1);
-            self.collect(r, &mut entries);
-            entries.push(e);
-            self.free_subtree(r);
+        let (len, next) = (
+            self.leaves[head as usize].len as usize,
+            self.leaves[head as usize].next,
+        );
+        if len < LEAF_CAP && next == NONE {
+            self.leaves[head as usize].push(e);
+        } else if len == LEAF_CAP && next == NONE && !self.chain_equals(head, &p) {
+            // A full leaf with distinct points: split it (on the stack, no allocation).
+            let leaf = &self.leaves[head as usize];
+            let mut entries = [e; LEAF_CAP + 1];
+            for (i, slot) in entries.iter_mut().take(LEAF_CAP).enumerate() {
+                *slot = leaf.entry(i);
+            }
+            self.free_leaf(head);
             let new = self.build(&mut entries);
             self.replace_child(path.last().copied(), r, new);
         } else if self.chain_equals(head, &p) {
@@ -443,7 +434,10 @@ impl LiveKdTree {
             let new = self.build(&mut entries);
             self.replace_child(path.last().copied(), r, new);
         }
-        self.rebalance(&path);
+        self.peak = self.peak.max(self.len);
+        if path.len() > depth_limit(self.len) {
+            self.rebalance(&path);
+        }
         self.path = path;
     }
 
@@ -507,17 +501,22 @@ impl LiveKdTree {
                 }
                 child = a;
             }
-            if self.leaves[head as usize].len == 0 {
-                if let Some(parent) = path.pop() {
-                    // Unlink the empty leaf: its sibling takes the parent's place.
-                    let n = self.inners[parent as usize];
-                    let sibling = if n.left == r { n.right } else { n.left };
-                    self.replace_child(path.last().copied(), parent, sibling);
-                    self.free_leaf(head);
-                    self.free_inners.push(parent);
-                }
+            if self.leaves[head as usize].len == 0
+                && let Some(parent) = path.pop()
+            {
+                // Unlink the empty leaf: its sibling takes the parent's place.
+                let n = self.inners[parent as usize];
+                let sibling = if n.left == r { n.right } else { n.left };
+                self.replace_child(path.last().copied(), parent, sibling);
+                self.free_leaf(head);
+                self.free_inners.push(parent);
             }
-            self.rebalance(&path);
+            if self.len > 2 * LEAF_CAP && 2 * self.len < self.peak {
+                let mut entries = self.entries();
+                self.free_subtree(self.root);
+                self.root = self.build(&mut entries);
+                self.peak = self.len;
+            }
         }
         self.path = path;
         found
@@ -560,14 +559,10 @@ impl LiveKdTree {
     /// Rebuilds the highest unbalanced sub-tree on `path` (root first).
     fn rebalance(&mut self, path: &[u32]) {
         for (i, &a) in path.iter().enumerate() {
-            if a as usize >= self.inners.len() {
-                continue;
-            }
             let n = self.inners[a as usize];
             let total = n.left_count + n.right_count;
-            if total > BALANCE_MIN
-                && n.left_count.max(n.right_count) as f32 > BALANCE * total as f32
-            {
+            let heavy = u64::from(n.left_count.max(n.right_count));
+            if heavy * BALANCE.1 > u64::from(total) * BALANCE.0 {
                 let mut entries = Vec::with_capacity(total as usize);
                 self.collect(a, &mut entries);
                 self.free_subtree(a);
@@ -581,26 +576,36 @@ impl LiveKdTree {
 
     // ---- queries ------------------------------------------------------------------------
 
-    /// Appends the `k` entries closest to `c` to `out` as `(distance², item)`, ascending
-    /// (ties in any order). Every entry left out is at least as far as the last one.
-    pub fn nearest(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
-        out.clear();
-        if k == 0 || self.len == 0 {
-            return;
+    /// Branch-and-bound nearest search (see [`crate::index::SpatialIndex::nearest_visit`]):
+    /// calls `f(distance², item)` for entries at most the current bound away, nearer
+    /// cells first, and skips cells strictly farther than the bound `f` returns.
+    pub fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, mut f: F) {
+        if self.len > 0 {
+            let mut bound = f32::INFINITY;
+            self.nearest_in(self.root, c, [0.0; 3], &mut bound, &mut f);
         }
-        let mut best = KBest { k, out };
-        self.nearest_in(self.root, c, [0.0; 3], &mut best);
     }
 
-    fn nearest_in(&self, r: u32, c: &Point, off: [f32; 3], best: &mut KBest<'_>) {
+    fn nearest_in<F: FnMut(f32, u32) -> f32>(
+        &self,
+        r: u32,
+        c: &Point,
+        off: [f32; 3],
+        bound: &mut f32,
+        f: &mut F,
+    ) {
         if is_leaf(r) {
             let mut l = leaf_index(r) as u32;
             while l != NONE {
                 let leaf = &self.leaves[l as usize];
                 let d = leaf.distances(c);
-                for (i, &di) in d.iter().enumerate().take(leaf.len as usize) {
-                    if !best.full() || di < best.bound() {
-                        best.offer(di, leaf.items[i]);
+                let b = *bound;
+                // Slots past `len` may hold stale points: a false hit only costs the loop.
+                if d.iter().fold(false, |hit, &x| hit | (x <= b)) {
+                    for (i, &di) in d.iter().enumerate().take(leaf.len as usize) {
+                        if di <= *bound {
+                            *bound = f(di, leaf.items[i]);
+                        }
                     }
                 }
                 l = leaf.next;
@@ -615,11 +620,11 @@ impl LiveKdTree {
         } else {
             (n.right, n.left)
         };
-        self.nearest_in(near, c, off, best);
+        self.nearest_in(near, c, off, bound, f);
         let mut far_off = off;
         far_off[dim] = delta.abs();
-        if !best.full() || cell_distance_squared(&far_off) < best.bound() {
-            self.nearest_in(far, c, far_off, best);
+        if cell_distance_squared(&far_off) <= *bound {
+            self.nearest_in(far, c, far_off, bound, f);
         }
     }
 
@@ -692,10 +697,8 @@ impl LiveKdTree {
                         if (0..3).any(|a| p[a] < lo[a] || p[a] >= hi[a]) {
                             return Err(format!("entry {p:?} outside its cell"));
                         }
-                        if leaf.next != NONE || l != head {
-                            if Some(p) != first {
-                                return Err("chained leaf holds distinct points".into());
-                            }
+                        if (leaf.next != NONE || l != head) && Some(p) != first {
+                            return Err("chained leaf holds distinct points".into());
                         }
                     }
                     n += leaf.len;
@@ -777,7 +780,6 @@ mod tests {
     fn check_queries(t: &LiveKdTree, model: &[Entry], rng: &mut impl Rng) {
         t.check().unwrap();
         assert_eq!(t.len(), model.len());
-        let mut out = Vec::new();
         for _ in 0..20 {
             let c = [
                 rng.gen_range(-2.0..12.0),
@@ -785,16 +787,24 @@ mod tests {
                 rng.gen_range(-1.0..2.0),
             ];
             let k = rng.gen_range(1..12);
-            t.nearest(&c, k, &mut out);
-            let got: Vec<f32> = out.iter().map(|e| e.0).collect();
-            assert_eq!(got, brute_nearest(model, &c, k));
-            for &(d, item) in &out {
+            // The k smallest distances, through the visitor with a k-best bound.
+            let mut best: Vec<f32> = Vec::new();
+            t.nearest_visit(&c, |d, item| {
                 assert!(
                     model
                         .iter()
                         .any(|e| e.item == item && distance_squared(&e.p, &c) == d)
                 );
-            }
+                let at = best.partition_point(|&x| x <= d);
+                best.insert(at, d);
+                best.truncate(k);
+                if best.len() == k {
+                    best[k - 1]
+                } else {
+                    f32::INFINITY
+                }
+            });
+            assert_eq!(best, brute_nearest(model, &c, k));
             let r2 = rng.gen_range(0.0..9.0f32);
             let mut w = Vec::new();
             t.within(&c, r2, &mut |d, item, _| w.push((item, d.to_bits())));
@@ -844,10 +854,14 @@ mod tests {
         t.insert([1.0, 2.0, 4.0], 999);
         t.check().unwrap();
         assert_eq!(t.len(), 201);
-        let mut out = Vec::new();
-        t.nearest(&[1.0, 2.0, 3.0], 300, &mut out);
-        assert_eq!(out.len(), 201);
-        assert_eq!(out[200], (1.0, 999));
+        let mut seen = Vec::new();
+        t.nearest_visit(&[1.0, 2.0, 3.0], |d, item| {
+            seen.push((d, item));
+            f32::INFINITY
+        });
+        seen.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        assert_eq!(seen.len(), 201);
+        assert_eq!(seen[200], (1.0, 999));
         for i in 0..200 {
             assert!(t.remove([1.0, 2.0, 3.0], i));
             t.check().unwrap();
@@ -879,12 +893,12 @@ mod tests {
             t.insert([i as f32, 0.0, 0.0], i);
         }
         t.check().unwrap();
-        assert!(t.depth() < 40, "depth {}", t.depth());
+        assert!(t.depth() <= depth_limit(t.len()) + 1, "depth {}", t.depth());
         for i in 0..99_000u32 {
             assert!(t.remove([i as f32, 0.0, 0.0], i));
         }
         t.check().unwrap();
-        assert!(t.depth() < 30, "depth {}", t.depth());
+        assert!(t.depth() <= depth_limit(t.len()), "depth {}", t.depth());
     }
 
     #[test]
@@ -902,7 +916,7 @@ mod tests {
             .collect();
         let t = LiveKdTree::from_entries(model.clone());
         check_queries(&t, &model, &mut rng);
-        // Full leaves after a bulk build: 16.25 bytes per point plus inner nodes.
-        assert!(t.memory_bytes() < 18 * model.len(), "{}", t.memory_bytes());
+        // Leaves 7/8 full after a bulk build: 18.6 bytes per point plus inner nodes.
+        assert!(t.memory_bytes() < 20 * model.len(), "{}", t.memory_bytes());
     }
 }

@@ -77,6 +77,7 @@ impl LiveIndexes {
 }
 
 fn apply(tree: &mut LiveKdTree, h: u32, old: &[Point], new: &[Point]) {
+    let (old, new) = crate::id::changed_points(old, new);
     for p in old {
         let found = tree.remove(*p, h);
         debug_assert!(found, "indexed point {p:?} missing");
@@ -152,7 +153,7 @@ impl SceneGraph {
             return Ok(());
         }
         let mut entries = Vec::new();
-        for (id, points) in self.subtree_points(node) {
+        for (id, points) in self.indexed_members(node) {
             let h = self.indexes.handle(id);
             entries.extend(
                 points
@@ -184,7 +185,7 @@ impl SceneGraph {
     }
 
     /// The nodes with points in `root`'s sub-tree, with their points.
-    fn subtree_points(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
+    fn indexed_members(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
         let mut out = Vec::new();
         let mut stack = vec![root];
         while let Some(id) = stack.pop() {
@@ -258,7 +259,7 @@ impl SceneGraph {
             return;
         }
         let moved: Vec<(u32, Vec<Point>)> = self
-            .subtree_points(child)
+            .indexed_members(child)
             .into_iter()
             .map(|(id, points)| (self.indexes.handle(id), points))
             .collect();
@@ -282,10 +283,10 @@ impl SceneGraph {
             return;
         }
         self.indexes.nodes.remove(&node.id);
-        if let Some(&h) = self.indexes.handle_of.get(&node.id) {
-            if let Some(t) = self.indexes.layers.get_mut(&node.layer) {
-                apply(t, h, &node.points, &[]);
-            }
+        if let Some(&h) = self.indexes.handle_of.get(&node.id)
+            && let Some(t) = self.indexes.layers.get_mut(&node.layer)
+        {
+            apply(t, h, &node.points, &[]);
         }
         self.indexes.release(node.id);
     }
@@ -329,7 +330,7 @@ impl SceneGraph {
         roots
             .into_iter()
             .map(|root| {
-                let mut members = self.subtree_points(root);
+                let mut members = self.indexed_members(root);
                 members.sort_unstable_by_key(|m| m.0);
                 let mut entries = Vec::new();
                 for (i, (_, points)) in members.iter().enumerate() {
@@ -390,7 +391,7 @@ impl SceneGraph {
             if !self.nodes.contains_key(&root) {
                 return Err(format!("index of missing node {root}"));
             }
-            if actual(t)? != expect(self.subtree_points(root)) {
+            if actual(t)? != expect(self.indexed_members(root)) {
                 return Err(format!("node index of {root} differs from its sub-tree"));
             }
         }

@@ -44,17 +44,12 @@ pub trait SpatialIndex {
     /// The node an item belongs to (`None` only for an item no point carries).
     fn node_of(&self, item: u32) -> Option<NodeId>;
 
-    /// Replaces `out` with the `k` points closest to `c` as `(distance², item)`, ascending
-    /// by distance (ties in any order); fewer when the index holds fewer.
-    ///
-    /// Every point left out has `distance² >= last * (1 - self.nearest_slack())`.
-    fn nearest_points(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>);
-
-    /// How far (as a share of the last distance²) [`SpatialIndex::nearest_points`] may
-    /// miss a point closer than its last result (rounding in the pruning bound).
-    fn nearest_slack(&self) -> f32 {
-        0.0
-    }
+    /// Branch-and-bound search from `c`, nearer cells first: calls `f(distance², item)`
+    /// for every point whose squared distance is at most the current bound, and skips
+    /// every cell whose points are all strictly farther than it. `f` returns the new bound
+    /// (it starts at `+∞` and may only shrink). Points *at* the bound are still reported,
+    /// so a caller can break ties exactly.
+    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F);
 
     /// Calls `f(distance², item, point)` for every point with `distance² <= r2`.
     fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F);
@@ -89,8 +84,8 @@ impl SpatialIndex for LiveIndex<'_> {
             .filter(|&id| id != NodeId::NONE)
     }
 
-    fn nearest_points(&self, c: &Point, k: usize, out: &mut Vec<(f32, u32)>) {
-        self.tree.nearest(c, k, out);
+    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
+        self.tree.nearest_visit(c, f);
     }
 
     fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, mut f: F) {
@@ -134,7 +129,7 @@ pub fn build_layer_index<V: SceneView>(view: &V, layer: LayerId) -> KdIndex {
             entries.extend(points.iter().map(|p| (item, *p)));
         }
     }
-    KdIndex::new(build_tree(&entries), ids)
+    KdIndex::new(&build_tree(&entries), ids)
 }
 
 /// A kd-tree index over every point in the sub-tree of `root` in `view` (empty for an
@@ -170,7 +165,7 @@ pub fn build_subtree_index<V: SceneView>(view: &V, root: NodeId) -> KdIndex {
             entries.extend(points.iter().map(|p| (item, *p)));
         }
     }
-    KdIndex::new(build_tree(&entries), ids)
+    KdIndex::new(&build_tree(&entries), ids)
 }
 
 /// Indexes a reader built itself, kept for as long as the layers they cover are

@@ -76,7 +76,39 @@ impl ConeView {
     }
 }
 
+/// Sub-trees with fewer points than this are walked even when they carry a node index.
+const INDEX_MIN_POINTS: usize = 4096;
+/// ... or with at least this many children.
+const INDEX_MIN_CHILDREN: usize = 16;
+
 impl Cone {
+    /// Whether some point of box `b` may lie inside the cone: false only when none can.
+    /// Two conservative tests: the box misses the ball enclosing the cone, or the
+    /// sphere around the box lies wholly outside the cone's angle (the angle between
+    /// the axis and any direction into the sphere is at least the angle to the sphere's
+    /// centre less the sphere's angular radius).
+    fn may_hit(&self, b: &crate::Aabb) -> bool {
+        let (centre, ball2) = self.ball;
+        if b.distance_squared_to(&centre) > ball2 {
+            return false;
+        }
+        let c = [0, 1, 2].map(|a| (f64::from(b.min[a]) + f64::from(b.max[a])) / 2.0);
+        let half = [0, 1, 2].map(|a| (f64::from(b.max[a]) - f64::from(b.min[a])) / 2.0);
+        let radius = (half[0] * half[0] + half[1] * half[1] + half[2] * half[2]).sqrt()
+            * (1.0 + 1e-9)
+            + 1e-9;
+        let v = [0, 1, 2].map(|a| c[a] - self.eye[a]);
+        let d = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if d <= radius {
+            return true;
+        }
+        let cos_axis =
+            ((v[0] * self.dir[0] + v[1] * self.dir[1] + v[2] * self.dir[2]) / d).clamp(-1.0, 1.0);
+        let to_centre = cos_axis.acos();
+        let spread = (radius / d).asin();
+        to_centre - spread <= self.cos_half.acos() + 1e-9
+    }
+
     /// Whether `p` is inside the cone (the one test every path uses).
     fn contains(&self, p: &Point) -> bool {
         let v = [0, 1, 2].map(|a| f64::from(p[a]) - self.eye[a]);
@@ -151,7 +183,15 @@ pub fn visible<V: SceneView>(
         if !seen.insert(id) {
             continue; // only a damaged snapshot can nest a node twice
         }
-        if let Some(index) = view.node_index(id) {
+        if view.aabb(n).is_some_and(|b| !cone.may_hit(&b)) {
+            continue;
+        }
+        // A kd-tree pays off for sub-trees with many points or many nodes; a small one is
+        // cheaper to walk, and the walk stops at a node's first visible point.
+        let worth_it = |i: &_| {
+            view.children(n).len() >= INDEX_MIN_CHILDREN || SpatialIndex::len(i) >= INDEX_MIN_POINTS
+        };
+        if let Some(index) = view.node_index(id).filter(worth_it) {
             let mut items = Vec::new();
             index.points_within(&centre, ball2, |_, item, p| {
                 if cone.contains(p) {
@@ -161,12 +201,6 @@ pub fn visible<V: SceneView>(
             items.sort_unstable();
             items.dedup();
             out.extend(items.into_iter().filter_map(|i| index.node_of(i)));
-            continue;
-        }
-        if view
-            .aabb(n)
-            .is_some_and(|b| b.distance_squared_to(&centre) > ball2)
-        {
             continue;
         }
         if view
@@ -181,6 +215,17 @@ pub fn visible<V: SceneView>(
     out.sort_unstable();
     out.dedup();
     Ok(out)
+}
+
+impl ConeView {
+    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
+    /// point.
+    ///
+    /// # Errors
+    /// As [`visible`], for an invalid cone.
+    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
+        Ok(self.checked()?.contains(p))
+    }
 }
 
 #[cfg(test)]
@@ -268,16 +313,5 @@ mod tests {
             d[0] * u[1] - d[1] * u[0],
         ];
         (u, w)
-    }
-}
-
-impl ConeView {
-    /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
-    /// point.
-    ///
-    /// # Errors
-    /// As [`visible`], for an invalid cone.
-    pub fn contains(&self, p: &Point) -> Result<bool, SpatialQueryError> {
-        Ok(self.checked()?.contains(p))
     }
 }

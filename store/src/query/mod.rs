@@ -54,7 +54,7 @@ impl Scope {
     pub fn layers<V: SceneView>(&self, view: &V) -> Vec<LayerId> {
         match self {
             Scope::Graph => view.layers().collect(),
-            Scope::Layer(l) => view.layers().filter(|x| x == l).collect(),
+            Scope::Layer(l) => view.layer_name(*l).map(|_| *l).into_iter().collect(),
         }
     }
 }

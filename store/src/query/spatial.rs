@@ -4,17 +4,21 @@
 //! [`crate::index::build_layer_index`]).
 //!
 //! # Semantics
-//! - A node's **distance** to `c` is the smallest `distance_squared(p, c).sqrt()` (in
-//!   `f32`) over its points `p`; nodes without points are never returned.
-//! - A node is **within** `r` of `c` when its distance is `<= r`.
-//! - Ranked results ascend by distance; equal distances go to the smaller [`NodeId`].
+//! - A node's squared distance to `c` is the smallest [`distance_squared`]`(p, c)` over
+//!   its points `p` (in `f32`); its **distance** is the square root of that. Nodes
+//!   without points are never returned.
+//! - A node is **within** `r` of `c` when it has a point `p` with
+//!   [`within_radius`]`(p, c, r)`, i.e. `distance_squared(p, c).sqrt() <= r`.
+//! - Ranked results ascend by squared distance; nodes at exactly the same squared
+//!   distance go to the smaller [`NodeId`].
 //!
 //! Indexed and scanning paths compute distances with the same expression
-//! ([`crate::distance_squared`]), so they agree bit for bit.
+//! ([`crate::distance_squared`]), so they agree bit for bit; a brute-force baseline built
+//! on these definitions gets the same answers.
 
 use crate::index::SpatialIndex;
 use crate::{NodeId, Point, SceneView, Scope, distance_squared};
-use rustc_hash::FxHashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Why a spatial query refused its input. Queries never panic on bad input.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -44,7 +48,13 @@ pub(crate) fn check_point(c: &Point) -> Result<(), SpatialQueryError> {
     }
 }
 
-/// The largest squared distance `d2` with `d2.sqrt() <= r`, so that "distance `<= r`"
+/// Whether `p` lies within distance `r` of `c`: exactly the test
+/// [`nodes_within_radius`] applies to every point (false for an invalid radius).
+pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
+    r.is_finite() && r >= 0.0 && distance_squared(p, c) <= radius_bound(r)
+}
+
+/// The largest squared distance `d2` with `d2.sqrt() <= r`, so that [`within_radius`]
 /// is exactly "`distance_squared <= radius_bound(r)`" (`sqrt` is monotone).
 pub(crate) fn radius_bound(r: f32) -> f32 {
     let mut x = r * r;
@@ -60,87 +70,111 @@ pub(crate) fn radius_bound(r: f32) -> f32 {
     x
 }
 
-/// The best `m` nodes seen so far, ascending by `(distance, id)`.
+/// Up to this many nodes, [`TopNodes`] keeps a sorted vector; beyond, a map of every
+/// node offered with a lazily refreshed bound.
+const SMALL_M: usize = 16;
+
+/// The best `m` nodes seen so far by `(squared distance, id)`. A node may be offered
+/// several times (once per point); it counts with its smallest squared distance.
 pub(crate) struct TopNodes {
     m: usize,
+    /// `m <= SMALL_M`: the best nodes, ascending, each once.
     best: Vec<(f32, NodeId)>,
+    /// `m > SMALL_M`: every node offered, with its smallest squared distance.
+    all: FxHashMap<NodeId, f32>,
+    /// `m > SMALL_M`: the `m`-th smallest value of `all` when last refreshed (it can only
+    /// have dropped since, so it stays an upper bound of the current `m`-th smallest).
+    bound: f32,
+    refresh_at: usize,
+}
+
+fn less(a: &(f32, NodeId), b: &(f32, NodeId)) -> bool {
+    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt()
 }
 
 impl TopNodes {
     pub(crate) fn new(m: usize) -> Self {
         TopNodes {
             m,
-            best: Vec::with_capacity(m.min(1024) + 1),
+            best: Vec::with_capacity(m.min(SMALL_M) + 1),
+            all: FxHashMap::default(),
+            bound: f32::INFINITY,
+            refresh_at: m,
         }
     }
 
-    pub(crate) fn offer(&mut self, dist: f32, id: NodeId) {
-        let key = |e: &(f32, NodeId)| (e.0, e.1);
-        let less =
-            |a: (f32, NodeId), b: (f32, NodeId)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).is_lt();
-        if self.best.len() == self.m && !less((dist, id), key(&self.best[self.m - 1])) {
+    pub(crate) fn offer(&mut self, d2: f32, id: NodeId) {
+        if self.m == 0 {
             return;
         }
-        let at = self.best.partition_point(|e| less(key(e), (dist, id)));
-        self.best.insert(at, (dist, id));
+        if self.m > SMALL_M {
+            let e = self.all.entry(id).or_insert(f32::INFINITY);
+            if d2 < *e {
+                *e = d2;
+            }
+            if self.all.len() >= self.refresh_at {
+                let mut v: Vec<f32> = self.all.values().copied().collect();
+                let (_, kth, _) = v.select_nth_unstable_by(self.m - 1, f32::total_cmp);
+                self.bound = *kth;
+                self.refresh_at = self.all.len() * 2;
+            }
+            return;
+        }
+        let e = (d2, id);
+        if let Some(i) = self.best.iter().position(|x| x.1 == id) {
+            if d2 >= self.best[i].0 {
+                return;
+            }
+            self.best.remove(i);
+        } else if self.best.len() == self.m && !less(&e, &self.best[self.m - 1]) {
+            return;
+        }
+        let at = self.best.partition_point(|x| less(x, &e));
+        self.best.insert(at, e);
         self.best.truncate(self.m);
     }
 
-    /// Whether nothing at distance `>= min_dist` can still enter (strictly farther than
-    /// the current `m`-th node).
-    pub(crate) fn prunes(&self, min_dist: f32) -> bool {
-        self.m == 0 || (self.best.len() == self.m && min_dist > self.best[self.m - 1].0)
+    /// A squared distance beyond which nothing can enter any more (`+∞` until `m` nodes
+    /// were seen).
+    pub(crate) fn bound(&self) -> f32 {
+        if self.m > SMALL_M {
+            self.bound
+        } else if self.best.len() == self.m {
+            self.best[self.m - 1].0
+        } else {
+            f32::INFINITY
+        }
     }
 
+    /// Whether nothing at squared distance `>= min_d2` can still enter.
+    pub(crate) fn prunes(&self, min_d2: f32) -> bool {
+        self.m == 0 || min_d2 > self.bound()
+    }
+
+    /// `(node, distance)` pairs, ascending.
     pub(crate) fn into_vec(self) -> Vec<(NodeId, f32)> {
-        self.best.into_iter().map(|(d, id)| (id, d)).collect()
+        let mut best = self.best;
+        if self.m > SMALL_M {
+            best = self.all.into_iter().map(|(id, d2)| (d2, id)).collect();
+            best.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            best.truncate(self.m);
+        }
+        best.into_iter().map(|(d2, id)| (id, d2.sqrt())).collect()
     }
 }
 
-/// Offers the exact best `top.m` nodes of `index` to `top`.
-///
-/// Asks the index for the `k` nearest points, growing `k` until the points strictly
-/// closer than the `k`-th one (less the index's slack) name at least `m` distinct nodes:
-/// every node not among them is then strictly farther than each of them, so ties and
-/// multi-point nodes are resolved exactly.
+/// Offers the nodes of `index` near `c` to `top` (exactly the best `top.m` of them, and
+/// perhaps others): one branch-and-bound pass whose bound is the current `m`-th best.
 pub(crate) fn index_nearest<I: SpatialIndex>(index: &I, c: &Point, top: &mut TopNodes) {
-    let m = top.m;
-    if m == 0 || index.is_empty() {
+    if top.m == 0 {
         return;
     }
-    let mut k = m.saturating_add(1);
-    let mut points = Vec::new();
-    let mut found: Vec<(f32, u32)> = Vec::new();
-    loop {
-        index.nearest_points(c, k, &mut points);
-        let complete = points.len() < k;
-        let limit = match points.last() {
-            Some(&(d2, _)) if !complete => (d2 * (1.0 - index.nearest_slack())).sqrt(),
-            _ => f32::INFINITY,
-        };
-        found.clear();
-        for &(d2, item) in &points {
-            let dist = d2.sqrt();
-            if !complete && dist >= limit {
-                break;
-            }
-            if found.len() >= m && dist > found[m - 1].0 {
-                break;
-            }
-            if !found.iter().any(|f| f.1 == item) {
-                found.push((dist, item));
-            }
+    index.nearest_visit(c, |d2, item| {
+        if let Some(id) = index.node_of(item) {
+            top.offer(d2, id);
         }
-        if complete || found.len() >= m {
-            for &(dist, item) in &found {
-                if let Some(id) = index.node_of(item) {
-                    top.offer(dist, id);
-                }
-            }
-            return;
-        }
-        k = k.saturating_mul(4);
-    }
+        top.bound()
+    });
 }
 
 /// Pushes the node of every point of `index` with `distance_squared <= r2`.
@@ -152,13 +186,12 @@ fn index_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32, out: &mut Vec<No
     out.extend(items.into_iter().filter_map(|i| index.node_of(i)));
 }
 
-/// A node's distance to `c` (`None` without points).
-fn node_distance<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
+/// A node's squared distance to `c` (`None` without points).
+fn node_distance2<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
     view.points(n)
         .iter()
         .map(|p| distance_squared(p, c))
         .min_by(f32::total_cmp)
-        .map(f32::sqrt)
 }
 
 /// At most `m` nodes in `scope` closest to `c`, with their distances.
@@ -171,8 +204,8 @@ fn node_distance<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) ->
 ///   returns them all; 0 returns none).
 ///
 /// # Returns
-/// `(node, distance)` pairs, ascending by distance, ties to the smaller id (see the
-/// module docs for the exact semantics).
+/// `(node, distance)` pairs, ascending by distance; nodes at the same squared distance go
+/// to the smaller id (see the module docs for the exact semantics).
 ///
 /// # Errors
 /// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
@@ -216,13 +249,14 @@ pub fn nearest_nodes<V: SceneView>(
             continue;
         }
         for n in view.layer_nodes(layer) {
-            if let Some(b) = view.aabb(n)
-                && top.prunes(b.distance_squared_to(&c).sqrt())
+            if view
+                .aabb(n)
+                .is_some_and(|b| top.prunes(b.distance_squared_to(&c)))
             {
                 continue;
             }
-            if let Some(d) = node_distance(view, n, &c) {
-                top.offer(d, view.node_id(n));
+            if let Some(d2) = node_distance2(view, n, &c) {
+                top.offer(d2, view.node_id(n));
             }
         }
     }
@@ -307,7 +341,8 @@ pub fn nodes_within_radius<V: SceneView>(
 /// * `m` – how many nodes at most.
 ///
 /// # Returns
-/// `(node, distance)` pairs, ascending by distance, ties to the smaller id.
+/// `(node, distance)` pairs, ascending by distance; nodes at the same squared distance go
+/// to the smaller id.
 ///
 /// # Errors
 /// [`SpatialQueryError::NonFinitePoint`] if `c` has a NaN or infinite coordinate.
@@ -361,13 +396,14 @@ pub fn nearest_in_subtree<V: SceneView>(
             index_nearest(&index, &c, &mut top);
             continue;
         }
-        if let Some(b) = view.aabb(n)
-            && top.prunes(b.distance_squared_to(&c).sqrt())
+        if view
+            .aabb(n)
+            .is_some_and(|b| top.prunes(b.distance_squared_to(&c)))
         {
             continue;
         }
-        if let Some(d) = node_distance(view, n, &c) {
-            top.offer(d, id);
+        if let Some(d2) = node_distance2(view, n, &c) {
+            top.offer(d2, id);
         }
         stack.extend(view.children(n).iter().filter_map(|&ch| view.node(ch)));
     }
@@ -469,18 +505,24 @@ mod tests {
     }
 
     #[test]
+    fn top_nodes_keeps_each_node_once_with_its_smallest_distance() {
+        for m in [2, 40] {
+            let mut t = TopNodes::new(m);
+            t.offer(4.0, NodeId(1));
+            t.offer(1.0, NodeId(1));
+            t.offer(9.0, NodeId(1));
+            t.offer(1.0, NodeId(2));
+            assert_eq!(t.into_vec(), vec![(NodeId(1), 1.0), (NodeId(2), 1.0)]);
+        }
+    }
+
+    #[test]
     fn top_nodes_orders_by_distance_then_id() {
         let mut t = TopNodes::new(2);
         t.offer(1.0, NodeId(5));
         t.offer(1.0, NodeId(3));
         t.offer(1.0, NodeId(4));
-        t.offer(0.5, NodeId(9));
+        t.offer(0.25, NodeId(9));
         assert_eq!(t.into_vec(), vec![(NodeId(9), 0.5), (NodeId(3), 1.0)]);
     }
-}
-
-/// Whether `p` lies within distance `r` of `c`: exactly the test
-/// [`nodes_within_radius`] applies to every point (false for an invalid radius).
-pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
-    r.is_finite() && r >= 0.0 && distance_squared(p, c) <= radius_bound(r)
 }

@@ -1,0 +1,1 @@
+//! Minimal Yggdrasil examples: see `writer.rs` and `reader.rs`.

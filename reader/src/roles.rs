@@ -1,0 +1,379 @@
+//! Demo consumers (`ygg-reader role`): a planner, a visibility checker and a label
+//! searcher, each attached to a live scene, querying every new snapshot, checking a
+//! sample of its answers against brute force on the same snapshot, and printing JSON
+//! progress and summary lines.
+
+use std::time::{Duration, Instant};
+use ygg_reader::{ReaderBuilder, SceneReader, SceneSnapshot};
+use ygg_store::query::{self, ConeView};
+use ygg_store::snapshot::ArchivedScene;
+use ygg_store::{NodeId, Point, SceneView, Scope, layout};
+
+/// Which consumer to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Role {
+    /// Nearest object, objects within a radius, room of the current position.
+    Planner,
+    /// Objects in the field of view from the newest agent pose.
+    Visibility,
+    /// Objects by label.
+    Labels,
+}
+
+/// Options of `ygg-reader role`.
+#[derive(clap::Args, Debug)]
+pub struct RoleArgs {
+    /// Scene name.
+    #[arg(long)]
+    scene: String,
+    /// The consumer to run.
+    #[arg(long, value_enum)]
+    role: Role,
+    /// How long to run.
+    #[arg(long, default_value_t = 20.0)]
+    seconds: f64,
+    /// Check every n-th batch of answers against brute force.
+    #[arg(long, default_value_t = 5)]
+    check_every: u64,
+    /// How long to wait for the writer to appear.
+    #[arg(long, default_value_t = 10.0)]
+    wait_for_writer: f64,
+}
+
+const LABELS: [&str; 6] = ["light", "chair", "shelf", "bulletin", "person", "unicorn"];
+
+/// Runs a role until `--seconds` pass or a signal arrives.
+pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let mut reader = attach(&args.scene, args.wait_for_writer)?;
+    let start = Instant::now();
+    let deadline = start + Duration::from_secs_f64(args.seconds.max(0.0));
+    let (mut query_ns, mut visible_ns, mut staleness) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut checked, mut matched, mut batches, mut snapshots) = (0u64, 0u64, 0u64, 0u64);
+    let mut current: Option<SceneSnapshot> = None;
+    let mut last_progress = start;
+    let mut writer_gone = false;
+    while Instant::now() < deadline && !reader.termination_requested() {
+        match reader.wait_next(Duration::from_millis(20)) {
+            Ok(Some(s)) => {
+                let fresh = current
+                    .as_ref()
+                    .is_none_or(|c| c.generation() != s.generation());
+                if fresh {
+                    let published = s.view().published_unix_ns();
+                    let now = ygg_store_unix_ns();
+                    if published > 0 && now >= published {
+                        visible_ns.push((now - published) as f64);
+                    }
+                    if let Some(c) = &current {
+                        staleness.push(s.generation().saturating_sub(c.generation() + 1) as f64);
+                    }
+                    snapshots += 1;
+                    current = Some(s);
+                }
+            }
+            Ok(None) => {}
+            Err(e) => {
+                if !writer_gone {
+                    println!(
+                        "{}",
+                        serde_json::json!({"event": "warning", "role": format!("{:?}", args.role), "message": e.to_string()})
+                    );
+                }
+                writer_gone = true;
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+        let Some(snap) = &current else { continue };
+        let view = snap.view();
+        batches += 1;
+        let check = batches % args.check_every.max(1) == 0;
+        let t = Instant::now();
+        let answers = answer(args.role, &view, batches);
+        query_ns.push(t.elapsed().as_nanos() as f64 / answers.len().max(1) as f64);
+        if check {
+            for (q, got) in &answers {
+                checked += 1;
+                if brute_force(&view, q) == *got {
+                    matched += 1;
+                }
+            }
+        }
+        if last_progress.elapsed() >= Duration::from_millis(500) {
+            last_progress = Instant::now();
+            println!(
+                "{}",
+                serde_json::json!({"event": "progress", "queries": query_ns.len(), "generation": snap.generation(),
+                    "seconds": start.elapsed().as_secs_f64(), "checked": checked, "matched": matched})
+            );
+        }
+    }
+    let q = percentiles(&mut query_ns);
+    let v = percentiles(&mut visible_ns);
+    let stale_mean = if staleness.is_empty() {
+        0.0
+    } else {
+        staleness.iter().sum::<f64>() / staleness.len() as f64
+    };
+    let stale_max = staleness.iter().copied().fold(0.0, f64::max);
+    println!(
+        "{}",
+        serde_json::json!({"event": "summary", "role": format!("{:?}", args.role).to_lowercase(),
+            "batches": query_ns.len(), "query_p50_us": q.0, "query_p99_us": q.1,
+            "visible_p50_us": v.0, "visible_p99_us": v.1, "snapshots": snapshots,
+            "staleness_mean": stale_mean, "staleness_max": stale_max,
+            "checked": checked, "matched": matched, "validations": reader.validations(),
+            "writer_gone": writer_gone})
+    );
+    Ok(())
+}
+
+fn ygg_store_unix_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
+}
+
+fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, Box<dyn std::error::Error>> {
+    let until = Instant::now() + Duration::from_secs_f64(wait_secs.max(0.0));
+    loop {
+        match ReaderBuilder::new(scene)
+            .handle_termination_signals(true)
+            .open()
+        {
+            Ok(s) => return Ok(SceneReader::with_subscriber(s)),
+            Err(ygg_reader::ReaderOpenError::NoWriter { .. }) if Instant::now() < until => {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+}
+
+fn percentiles(v: &mut [f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0);
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize] / 1e3;
+    (at(0.5), at(0.99))
+}
+
+/// One query of a role, kept so the answer can be re-checked by brute force.
+#[derive(Clone, Debug)]
+enum Query {
+    Room(Point),
+    Nearest {
+        mesh_layer: ygg_store::LayerId,
+        point: Point,
+    },
+    Within {
+        mesh_layer: ygg_store::LayerId,
+        point: Point,
+        radius: f32,
+    },
+    Visible {
+        mesh_layer: ygg_store::LayerId,
+        cone: ConeView,
+    },
+    Label(&'static str),
+}
+
+/// The newest agent pose and the one before it (the agents layer's two largest ids).
+fn newest_pose(view: &ArchivedScene<'_>) -> Option<(Point, Point)> {
+    let agents = view.layer_by_name("AGENTS")?;
+    let mut ids: Vec<NodeId> = view.layer_nodes(agents).map(|n| view.node_id(n)).collect();
+    ids.sort_unstable();
+    let p = |i: NodeId| view.node(i).and_then(|n| view.points(n).first().copied());
+    let last = p(*ids.last()?)?;
+    let prev = ids.len().checked_sub(2).and_then(|i| p(ids[i])).unwrap_or([
+        last[0] - 1.0,
+        last[1],
+        last[2],
+    ]);
+    Some((last, prev))
+}
+
+/// The room whose exact box holds `p` (x and y), smallest id first.
+fn room_of(view: &ArchivedScene<'_>, p: &Point) -> Option<NodeId> {
+    let rooms = view.layer_by_name("ROOMS")?;
+    let mut found: Vec<NodeId> = view
+        .layer_nodes(rooms)
+        .filter(|&n| {
+            view.aabb(n)
+                .is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a]))
+        })
+        .map(|n| view.node_id(n))
+        .collect();
+    found.sort_unstable();
+    found.first().copied()
+}
+
+fn room_scope(view: &ArchivedScene<'_>, room: NodeId) -> Option<(ygg_store::LayerId, NodeId)> {
+    let mesh = view.layer_by_name(&layout::claimed_mesh_layer_name(room))?;
+    let group = view.layer_by_name(&format!("room:{}", room.0))?;
+    let claimed = view.layer_nodes(group).map(|n| view.node_id(n)).min()?;
+    Some((mesh, claimed))
+}
+
+fn owners(view: &ArchivedScene<'_>, ids: impl IntoIterator<Item = NodeId>) -> Vec<u64> {
+    let mut out: Vec<u64> = ids
+        .into_iter()
+        .filter_map(|m| query::parent(view, m))
+        .map(|p| p.0)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Runs one batch of the role's queries with the store's (indexed) API.
+fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u64>)> {
+    let mut out = Vec::new();
+    match role {
+        Role::Labels => {
+            let label = LABELS[batch as usize % LABELS.len()];
+            let ids = query::nodes_with_label(view, Scope::Graph, label)
+                .into_iter()
+                .map(|n| n.0)
+                .collect();
+            out.push((Query::Label(label), ids));
+        }
+        Role::Planner | Role::Visibility => {
+            let Some((pose, prev)) = newest_pose(view) else {
+                return out;
+            };
+            let room = room_of(view, &pose);
+            out.push((Query::Room(pose), room.map(|r| r.0).into_iter().collect()));
+            let Some((mesh_layer, claimed)) = room.and_then(|r| room_scope(view, r)) else {
+                return out;
+            };
+            if role == Role::Planner {
+                let nearest = query::nearest_nodes(view, Scope::Layer(mesh_layer), pose, 1)
+                    .unwrap_or_default();
+                out.push((
+                    Query::Nearest {
+                        mesh_layer,
+                        point: pose,
+                    },
+                    owners(view, nearest.into_iter().map(|n| n.0)),
+                ));
+                let within = query::nodes_within_radius(view, Scope::Layer(mesh_layer), pose, 1.5)
+                    .unwrap_or_default();
+                out.push((
+                    Query::Within {
+                        mesh_layer,
+                        point: pose,
+                        radius: 1.5,
+                    },
+                    owners(view, within),
+                ));
+            } else {
+                let d = [pose[0] - prev[0], pose[1] - prev[1], 0.0];
+                let dir = if d[0] == 0.0 && d[1] == 0.0 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    d
+                };
+                let cone = ConeView {
+                    eye: pose,
+                    dir,
+                    half_angle: 45f32.to_radians(),
+                    range: 5.0,
+                };
+                let seen = query::visible(view, claimed, &cone).unwrap_or_default();
+                let seen = seen.into_iter().filter(|&n| {
+                    view.node(n)
+                        .is_some_and(|x| view.node_layer(x) == mesh_layer)
+                });
+                out.push((Query::Visible { mesh_layer, cone }, owners(view, seen)));
+            }
+        }
+    }
+    out
+}
+
+/// The same query answered by scanning every candidate, no index.
+fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
+    match q {
+        Query::Room(p) => room_of_brute(view, p).into_iter().collect(),
+        Query::Nearest { mesh_layer, point } => {
+            let mut best: Option<(f32, u64)> = None;
+            for n in view.layer_nodes(*mesh_layer) {
+                let Some(owner) = view.parent(n) else {
+                    continue;
+                };
+                for p in view.points(n) {
+                    let d = ygg_store::distance_squared(p, point);
+                    if best.is_none_or(|(bd, bo)| d < bd || (d == bd && owner.0 < bo)) {
+                        best = Some((d, owner.0));
+                    }
+                }
+            }
+            best.map(|b| b.1).into_iter().collect()
+        }
+        Query::Within {
+            mesh_layer,
+            point,
+            radius,
+        } => {
+            let hits = view
+                .layer_nodes(*mesh_layer)
+                .filter(|&n| {
+                    view.points(n)
+                        .iter()
+                        .any(|p| query::within_radius(p, point, *radius))
+                })
+                .map(|n| view.node_id(n));
+            owners(view, hits.collect::<Vec<_>>())
+        }
+        Query::Visible {
+            mesh_layer, cone, ..
+        } => {
+            let hits = view
+                .layer_nodes(*mesh_layer)
+                .filter(|&n| {
+                    view.points(n)
+                        .iter()
+                        .any(|p| cone.contains(p).unwrap_or(false))
+                })
+                .map(|n| view.node_id(n));
+            owners(view, hits.collect::<Vec<_>>())
+        }
+        Query::Label(label) => {
+            let mut ids: Vec<u64> = view
+                .layers()
+                .flat_map(|l| {
+                    view.layer_nodes(l)
+                        .filter(|&n| view.has_label(n, label))
+                        .map(|n| view.node_id(n).0)
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            ids.sort_unstable();
+            ids
+        }
+    }
+}
+
+/// The room by recomputing each room's box from its sub-tree's points.
+fn room_of_brute(view: &ArchivedScene<'_>, p: &Point) -> Option<u64> {
+    let rooms = view.layer_by_name("ROOMS")?;
+    let mut found: Vec<u64> = Vec::new();
+    for r in view.layer_nodes(rooms) {
+        let id = view.node_id(r);
+        let mut b: Option<ygg_store::Aabb> = None;
+        for n in query::subtree(view, id) {
+            for q in view.node(n).map(|x| view.points(x)).unwrap_or_default() {
+                b = Some(b.map_or(ygg_store::Aabb::from_point(*q), |mut bb| {
+                    bb.grow(q);
+                    bb
+                }));
+            }
+        }
+        if b.is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a])) {
+            found.push(id.0);
+        }
+    }
+    found.sort_unstable();
+    found.first().copied()
+}

@@ -1,0 +1,328 @@
+//! The object queries of `ygg_store::objects` equal brute force computed straight from
+//! the imported Spark-DSG graph (mesh points and `mesh_connections`), on every layout,
+//! live and saved-and-reopened.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use ygg_store::dsg::{self, DsgGraph, NodeKind};
+use ygg_store::layout::{self, Layout};
+use ygg_store::objects::{ObjectQuery, Objects, cone_view};
+use ygg_store::query::within_radius;
+use ygg_store::{NodeId, Point, SceneView, SnapshotFile, distance_squared};
+
+fn fixture(name: &str) -> DsgGraph {
+    let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
+    dsg::read_file(&path).unwrap()
+}
+
+/// Brute force over the imported graph.
+struct Truth {
+    /// Object id (ascending) and its claimed points.
+    objects: Vec<(u64, Vec<Point>)>,
+    /// Object id and label.
+    labels: Vec<(u64, Option<String>)>,
+}
+
+impl Truth {
+    fn new(d: &DsgGraph) -> Self {
+        let mut objects: Vec<(u64, Vec<Point>)> = d
+            .nodes
+            .iter()
+            .filter(|n| n.kind == NodeKind::Object)
+            .map(|n| {
+                let pts = match &d.mesh {
+                    Some(m) => n
+                        .mesh_connections
+                        .iter()
+                        .map(|&v| m.points[v as usize])
+                        .collect(),
+                    None => Vec::new(),
+                };
+                (n.id, pts)
+            })
+            .collect();
+        objects.sort_by_key(|o| o.0);
+        let labels = d
+            .nodes
+            .iter()
+            .filter(|n| n.kind == NodeKind::Object)
+            .map(|n| (n.id, n.label.clone()))
+            .collect();
+        Truth { objects, labels }
+    }
+
+    fn answer(&self, q: &ObjectQuery) -> Vec<NodeId> {
+        let mut out: Vec<u64> = match q {
+            ObjectQuery::NearestObject { point } => {
+                let mut best: Option<(f32, u64)> = None;
+                for (id, pts) in &self.objects {
+                    for p in pts {
+                        let d = distance_squared(p, point).sqrt();
+                        if best.is_none_or(|(bd, bid)| d < bd || (d == bd && *id < bid)) {
+                            best = Some((d, *id));
+                        }
+                    }
+                }
+                best.map(|b| b.1).into_iter().collect()
+            }
+            ObjectQuery::ObjectsWithin { point, radius } => self
+                .objects
+                .iter()
+                .filter(|(_, pts)| pts.iter().any(|p| within_radius(p, point, *radius)))
+                .map(|o| o.0)
+                .collect(),
+            ObjectQuery::VisibleObjects {
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+            } => {
+                let cone = cone_view(*eye, *dir, *half_angle_deg, *range).unwrap();
+                self.objects
+                    .iter()
+                    .filter(|(_, pts)| pts.iter().any(|p| cone.contains(p).unwrap()))
+                    .map(|o| o.0)
+                    .collect()
+            }
+            ObjectQuery::ObjectsWithLabel { label } => self
+                .labels
+                .iter()
+                .filter(|(_, l)| l.as_deref() == Some(label.as_str()))
+                .map(|o| o.0)
+                .collect(),
+        };
+        out.sort_unstable();
+        out.into_iter().map(NodeId).collect()
+    }
+}
+
+/// Random queries over the scene's extent, biased to hit objects: points on and near
+/// claimed vertices (exact ties on shared vertices), and zero / huge radii and ranges.
+fn random_queries(d: &DsgGraph, truth: &Truth, n: usize, seed: u64) -> Vec<ObjectQuery> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let claimed: Vec<Point> = truth
+        .objects
+        .iter()
+        .flat_map(|o| o.1.iter().copied())
+        .collect();
+    let (lo, hi) = extent(d);
+    let mut labels: Vec<String> = truth.labels.iter().filter_map(|l| l.1.clone()).collect();
+    labels.extend(["absent".to_owned(), String::new(), "room".to_owned()]);
+    let point = |rng: &mut ChaCha8Rng| -> Point {
+        match rng.gen_range(0..4) {
+            0 if !claimed.is_empty() => claimed[rng.gen_range(0..claimed.len())],
+            1 if !claimed.is_empty() => {
+                let p = claimed[rng.gen_range(0..claimed.len())];
+                p.map(|v| v + rng.gen_range(-0.3..0.3))
+            }
+            _ => [0, 1, 2].map(|a| rng.gen_range(lo[a] - 2.0..hi[a] + 2.0)),
+        }
+    };
+    (0..n)
+        .map(|i| match i % 4 {
+            0 => ObjectQuery::NearestObject {
+                point: point(&mut rng),
+            },
+            1 => ObjectQuery::ObjectsWithin {
+                point: point(&mut rng),
+                radius: *[0.0, 0.05, 0.25, 0.5, 1.0, 2.0, 4.0, 100.0]
+                    .get(rng.gen_range(0..8))
+                    .unwrap_or(&1.0),
+            },
+            2 => {
+                let dir: Point = if rng.gen_bool(0.2) {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0, 1, 2].map(|_| rng.gen_range(-1.0..1.0))
+                };
+                ObjectQuery::VisibleObjects {
+                    eye: point(&mut rng),
+                    dir: if dir.iter().all(|v| *v == 0.0) {
+                        [0.0, 0.0, 1.0]
+                    } else {
+                        dir
+                    },
+                    half_angle_deg: *[0.0, 10.0, 30.0, 45.0, 70.0, 90.0, 135.0, 180.0]
+                        .get(rng.gen_range(0..8))
+                        .unwrap_or(&30.0),
+                    range: *[0.0, 0.3, 1.0, 3.0, 8.0, 50.0]
+                        .get(rng.gen_range(0..6))
+                        .unwrap_or(&3.0),
+                }
+            }
+            _ => ObjectQuery::ObjectsWithLabel {
+                label: labels[rng.gen_range(0..labels.len())].clone(),
+            },
+        })
+        .collect()
+}
+
+fn extent(d: &DsgGraph) -> (Point, Point) {
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [f32::MIN; 3];
+    let pts = d
+        .mesh
+        .iter()
+        .flat_map(|m| m.points.iter())
+        .chain(d.nodes.iter().map(|n| &n.position));
+    for p in pts {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    (lo, hi)
+}
+
+fn answers<V: SceneView>(view: &V, queries: &[ObjectQuery]) -> Vec<Vec<NodeId>> {
+    let objects = Objects::new(view);
+    queries.iter().map(|q| objects.answer(q).unwrap()).collect()
+}
+
+fn check_against_brute_force(d: &DsgGraph, n: usize, seed: u64) {
+    let truth = Truth::new(d);
+    let queries = random_queries(d, &truth, n, seed);
+    let want: Vec<Vec<NodeId>> = queries.iter().map(|q| truth.answer(q)).collect();
+    let non_empty = want.iter().filter(|a| !a.is_empty()).count();
+    let dir = tempfile::tempdir().unwrap();
+    for layout in Layout::ALL {
+        let g = layout::build(d, layout).unwrap();
+        let live = answers(&g, &queries);
+        let path = dir.path().join(format!("{layout}.ygg"));
+        g.save(&path).unwrap();
+        let file = SnapshotFile::open(&path).unwrap();
+        let archived = answers(&file.view(), &queries);
+        for (i, q) in queries.iter().enumerate() {
+            assert_eq!(live[i], want[i], "{layout} live, query {i}: {q:?}");
+            assert_eq!(archived[i], want[i], "{layout} archived, query {i}: {q:?}");
+        }
+    }
+    eprintln!(
+        "{}: {n} queries, {non_empty} with non-empty answers",
+        d.source
+    );
+    if d.mesh.is_some() {
+        assert!(non_empty > n / 2, "the queries hit too few objects");
+    }
+}
+
+#[test]
+fn office_tiny_answers_equal_brute_force_on_every_layout() {
+    check_against_brute_force(&fixture("office_tiny.json"), 2000, 11);
+}
+
+#[test]
+fn generated_office_answers_equal_brute_force_on_every_layout() {
+    let d = dsg::office::generate(dsg::office::OfficeParams {
+        seed: 3,
+        scale: 0.05,
+    });
+    check_against_brute_force(&d, 600, 5);
+}
+
+#[test]
+fn apartment_without_mesh_answers_labels_only() {
+    let d = fixture("apartment_dsg.json");
+    check_against_brute_force(&d, 200, 2);
+    for layout in Layout::ALL {
+        let g = layout::build(&d, layout).unwrap();
+        let o = Objects::new(&g);
+        assert_eq!(o.objects().len(), 7, "{layout}");
+        assert_eq!(o.nearest_object([0.0; 3]).unwrap(), None, "{layout}");
+    }
+}
+
+#[test]
+fn objects_are_found_in_every_layout() {
+    let d = fixture("office_tiny.json");
+    let want: Vec<NodeId> = Truth::new(&d).objects.iter().map(|o| NodeId(o.0)).collect();
+    for layout in Layout::ALL {
+        let g = layout::build(&d, layout).unwrap();
+        let o = Objects::new(&g);
+        assert_eq!(o.objects(), want, "{layout}");
+        assert_eq!(
+            o.objects_with_geometry().collect::<Vec<_>>(),
+            want,
+            "{layout}"
+        );
+        assert!(!o.mesh_layers().is_empty(), "{layout}");
+    }
+}
+
+#[test]
+fn shared_vertices_tie_to_the_smaller_id() {
+    let d = fixture("office_tiny.json");
+    let truth = Truth::new(&d);
+    // A vertex claimed by two or more objects: nearest from exactly there is the
+    // smallest claimant, and a zero radius finds every claimant.
+    let mut claims: std::collections::BTreeMap<[u32; 3], Vec<u64>> = Default::default();
+    for (id, pts) in &truth.objects {
+        for p in pts {
+            claims.entry(p.map(f32::to_bits)).or_default().push(*id);
+        }
+    }
+    let shared: Vec<(Point, Vec<u64>)> = claims
+        .into_iter()
+        .filter_map(|(k, mut ids)| {
+            ids.sort_unstable();
+            ids.dedup();
+            (ids.len() > 1).then(|| (k.map(f32::from_bits), ids))
+        })
+        .take(50)
+        .collect();
+    assert!(!shared.is_empty());
+    for layout in Layout::ALL {
+        let g = layout::build(&d, layout).unwrap();
+        let o = Objects::new(&g);
+        for (p, ids) in &shared {
+            assert_eq!(o.nearest_object(*p).unwrap(), Some(NodeId(ids[0])));
+            let within = o.objects_within(*p, 0.0).unwrap();
+            for id in ids {
+                assert!(within.contains(&NodeId(*id)), "{layout}");
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_inputs_are_errors_on_every_layout() {
+    let d = fixture("office_tiny.json");
+    let bad = [
+        ObjectQuery::NearestObject {
+            point: [f32::NAN, 0.0, 0.0],
+        },
+        ObjectQuery::ObjectsWithin {
+            point: [0.0; 3],
+            radius: -1.0,
+        },
+        ObjectQuery::ObjectsWithin {
+            point: [f32::INFINITY, 0.0, 0.0],
+            radius: 1.0,
+        },
+        ObjectQuery::VisibleObjects {
+            eye: [0.0; 3],
+            dir: [0.0; 3],
+            half_angle_deg: 30.0,
+            range: 1.0,
+        },
+        ObjectQuery::VisibleObjects {
+            eye: [0.0; 3],
+            dir: [1.0, 0.0, 0.0],
+            half_angle_deg: 181.0,
+            range: 1.0,
+        },
+        ObjectQuery::VisibleObjects {
+            eye: [0.0; 3],
+            dir: [1.0, 0.0, 0.0],
+            half_angle_deg: 30.0,
+            range: f32::NAN,
+        },
+    ];
+    for layout in Layout::ALL {
+        let g = layout::build(&d, layout).unwrap();
+        let o = Objects::new(&g);
+        for q in &bad {
+            assert!(o.answer(q).is_err(), "{layout}: {q:?}");
+        }
+    }
+}

@@ -1,0 +1,231 @@
+//! End-to-end tests of the scene layer over shared memory with real processes: a
+//! `ygg-writer serve` process publishing the office with a live update stream, reader
+//! processes and in-process readers querying validated snapshots, corrupted archives
+//! refused, and the demo stopped by Ctrl-C leaving nothing behind.
+
+use std::time::{Duration, Instant};
+
+use rustix::process::Signal;
+use ygg_reader::{ReaderBuilder, SceneReader, SceneReceiveError, SceneSnapshot};
+use ygg_store::query::{self, nodes_with_label};
+use ygg_store::{SceneView, Scope, layout};
+use ygg_tests::{Proc, TestScene, Watchdog};
+use ygg_writer::WriterBuilder;
+
+const STEP: Duration = Duration::from_secs(60);
+const WATCHDOG: Duration = Duration::from_secs(180);
+
+fn attach(scene: &TestScene) -> SceneReader {
+    let until = Instant::now() + STEP;
+    loop {
+        match ReaderBuilder::new(&scene.name)
+            .iceoryx_prefix(&scene.prefix)
+            .open()
+        {
+            Ok(s) => return SceneReader::with_subscriber(s),
+            Err(e) if Instant::now() < until => {
+                let _ = e;
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            Err(e) => panic!("attach: {e}"),
+        }
+    }
+}
+
+fn snapshot_after(reader: &mut SceneReader, generation: u64) -> SceneSnapshot {
+    let until = Instant::now() + STEP;
+    loop {
+        let next = reader
+            .wait_next(Duration::from_millis(200))
+            .expect("receive");
+        if let Some(s) = next.filter(|s| s.generation() >= generation) {
+            return s;
+        }
+        assert!(
+            Instant::now() < until,
+            "no snapshot of generation {generation}"
+        );
+    }
+}
+
+fn spawn_serve(scene: &TestScene, watchdog: &Watchdog, extra: &[&str]) -> Proc {
+    let mut args = vec!["serve", "--scene", scene.name.as_str(), "--scale", "0.05"];
+    args.extend_from_slice(extra);
+    Proc::spawn(scene.command("ygg-writer", &args), "writer", watchdog)
+}
+
+#[test]
+fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
+    let scene = TestScene::new("serve");
+    let watchdog = Watchdog::new(WATCHDOG);
+    let mut writer = spawn_serve(&scene, &watchdog, &["--rate", "30", "--seconds", "60"]);
+    writer.expect_line(STEP, |l| l.contains("\"ready\""));
+    let mut reader = attach(&scene);
+    let first = snapshot_after(&mut reader, 1);
+    let later = snapshot_after(&mut reader, first.generation() + 5);
+    let view = later.view();
+    assert!(
+        view.node_count() > 100,
+        "office too small: {}",
+        view.node_count()
+    );
+    // Agent poses keep arriving.
+    let agents = view.layer_by_name("AGENTS").expect("agents layer");
+    assert!(view.layer_len(agents) > first.view().layer_len(agents));
+    // Unchanged layers are not validated again: far fewer validations than layers seen.
+    let layers = view.layers().count() as u64;
+    assert!(
+        reader.validations() < layers * 4,
+        "{} validations for {layers} layers",
+        reader.validations()
+    );
+    // Indexed room-scoped nearest equals a brute-force scan of the same snapshot.
+    let mut compared = 0;
+    for (mesh, _) in layout::object_mesh_layers(&view) {
+        for c in [[5.0f32, 5.0, 1.0], [20.0, 12.0, 0.5], [33.0, 20.0, 2.0]] {
+            let indexed =
+                query::nearest_nodes(&view, Scope::Layer(mesh), c, 3).expect("valid query");
+            let mut brute: Vec<(ygg_store::NodeId, f32)> = view
+                .layer_nodes(mesh)
+                .filter_map(|n| {
+                    let d = view
+                        .points(n)
+                        .iter()
+                        .map(|p| ygg_store::distance_squared(p, &c))
+                        .fold(f32::INFINITY, f32::min);
+                    d.is_finite().then(|| (view.node_id(n), d.sqrt()))
+                })
+                .collect();
+            brute.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            brute.truncate(3);
+            assert_eq!(
+                indexed.iter().map(|x| x.0).collect::<Vec<_>>(),
+                brute.iter().map(|x| x.0).collect::<Vec<_>>()
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared > 0);
+    assert!(!nodes_with_label(&view, Scope::Graph, "light").is_empty());
+    // A reader process (the demo's planner) agrees with brute force on every check.
+    let mut planner = Proc::spawn(
+        scene.command(
+            "ygg-reader",
+            &[
+                "role",
+                "--scene",
+                &scene.name,
+                "--role",
+                "planner",
+                "--seconds",
+                "3",
+                "--check-every",
+                "1",
+            ],
+        ),
+        "planner",
+        &watchdog,
+    );
+    let summary = planner.expect_line(STEP, |l| l.contains("\"summary\""));
+    assert!(planner.wait_exit(STEP).success());
+    let v: serde_json::Value = serde_json::from_str(&summary).expect("summary is JSON");
+    assert!(v["checked"].as_u64().unwrap_or(0) > 0, "{summary}");
+    assert_eq!(v["checked"], v["matched"], "{summary}");
+    drop(later);
+    drop(first);
+    drop(reader);
+    writer.signal(Signal::TERM);
+    assert!(writer.wait_exit(STEP).success());
+    scene.assert_no_leftovers(Duration::from_secs(5));
+}
+
+#[test]
+fn corrupted_archive_bytes_are_refused_by_the_reader() {
+    let scene = TestScene::new("corrupt");
+    let mut publisher = WriterBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .create()
+        .expect("writer");
+    let mut g = ygg_store::SceneGraph::new();
+    let rooms = g.add_layer("rooms").expect("layer");
+    g.add_node(ygg_store::NodeId(1), rooms).expect("node");
+    let segment = g.layer_segment(rooms);
+    let len = segment.archived_len();
+    // A layer whose archive is damaged after the transport header (which stays valid).
+    publisher
+        .publish_layer(
+            rooms.0,
+            g.layer_generation(rooms).expect("gen"),
+            len,
+            |buf| {
+                segment.archive_into(buf).expect("fits");
+                for b in &mut buf[len / 3..] {
+                    *b ^= 0x5a;
+                }
+            },
+        )
+        .expect("publish layer");
+    let manifest = g.manifest(1);
+    let entries = [ygg_reader::ManifestEntry {
+        layer_id: rooms.0,
+        generation: g.layer_generation(rooms).expect("gen"),
+    }];
+    publisher
+        .publish_manifest(1, &entries, manifest.archived_len(), |buf| {
+            manifest.archive_into(buf).expect("fits");
+        })
+        .expect("publish manifest");
+    let mut reader = attach(&scene);
+    let until = Instant::now() + STEP;
+    let err = loop {
+        match reader.wait_next(Duration::from_millis(200)) {
+            Err(e) => break e,
+            Ok(Some(_)) => panic!("a damaged archive was accepted"),
+            Ok(None) => assert!(Instant::now() < until, "no snapshot arrived"),
+        }
+    };
+    assert!(matches!(err, SceneReceiveError::Invalid { .. }), "{err}");
+    assert!(
+        err.to_string().contains(&scene.name),
+        "error names the scene: {err}"
+    );
+    drop(reader);
+    drop(publisher);
+    scene.assert_no_leftovers(Duration::from_secs(5));
+}
+
+#[test]
+fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
+    let scene = TestScene::new("demo");
+    let watchdog = Watchdog::new(WATCHDOG);
+    let mut demo = Proc::spawn(
+        scene.command(
+            "ygg-bench",
+            &[
+                "demo",
+                "--seconds",
+                "60",
+                "--scale",
+                "0.05",
+                "--readers",
+                "2",
+            ],
+        ),
+        "demo",
+        &watchdog,
+    );
+    demo.expect_line(STEP, |l| l.starts_with("Yggdrasil demo"));
+    // Let the writer and readers come up, then press Ctrl-C.
+    std::thread::sleep(Duration::from_secs(4));
+    demo.signal(Signal::INT);
+    let status = demo.wait_exit(STEP);
+    let out = demo.stdout().join("\n");
+    assert!(
+        status.success(),
+        "demo failed after Ctrl-C:\n{out}\n{}",
+        demo.stderr().join("\n")
+    );
+    assert!(out.contains("interrupted"), "{out}");
+    assert!(out.contains("nothing left in /dev/shm"), "{out}");
+    scene.assert_no_leftovers(Duration::from_secs(5));
+}

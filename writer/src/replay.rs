@@ -1,0 +1,252 @@
+//! [`SlamReplay`]: a SLAM-like stream of updates for a served office: agent poses
+//! appended at the tick rate, objects moving and appearing, the mesh growing room by
+//! room. It drives `ygg-writer serve --rate` and the demo.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use ygg_store::dsg::NodeSymbol;
+use ygg_store::layout;
+use ygg_store::query::{self, children, nearest_nodes};
+use ygg_store::{EditResult, FeatureValue, LayerId, NodeId, Point, SceneGraph, SceneView, Scope};
+
+/// What one [`SlamReplay::step`] changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepReport {
+    /// Agent poses appended.
+    pub poses: u32,
+    /// Objects moved.
+    pub objects_moved: u32,
+    /// Objects added.
+    pub objects_added: u32,
+    /// Mesh points added.
+    pub mesh_points: u32,
+}
+
+/// A deterministic SLAM-like update stream over a scene built by
+/// [`ygg_store::layout::build`] (any layout; pieces a scene lacks are skipped).
+pub struct SlamReplay {
+    rng: ChaCha8Rng,
+    tick: u64,
+    agents: Option<LayerId>,
+    places: Option<LayerId>,
+    last_pose: Option<NodeId>,
+    next_pose: u64,
+    position: Point,
+    waypoint: Point,
+    rooms: Vec<(NodeId, [f32; 6])>,
+    objects: Vec<NodeId>,
+    next_object: u64,
+}
+
+/// Ticks between object moves, mesh patches and new objects (at 30 Hz: 1 s, 0.5 s, 5 s).
+const MOVE_EVERY: u64 = 30;
+const MESH_EVERY: u64 = 15;
+const NEW_OBJECT_EVERY: u64 = 150;
+/// Metres an agent moves per tick.
+const STEP: f32 = 0.05;
+
+impl SlamReplay {
+    /// A stream over `g` from a fixed seed.
+    pub fn new(g: &SceneGraph, seed: u64) -> Self {
+        let agents = g.layer_by_name("AGENTS");
+        let places = g.layer_by_name("PLACES");
+        let last_pose = agents.and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).max());
+        let next_pose = last_pose.map_or(0, |p| NodeSymbol(p.0).index() + 1);
+        let position = last_pose
+            .and_then(|p| g.node(p))
+            .and_then(|n| g.points(n).first().copied())
+            .unwrap_or([1.0, 12.5, 1.0]);
+        let rooms: Vec<(NodeId, [f32; 6])> = g
+            .layer_by_name("ROOMS")
+            .map(|l| {
+                g.layer_nodes(l)
+                    .filter_map(|n| Some((g.node_id(n), g.aabb(n)?.to_array())))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let mut objects: Vec<NodeId> = layout::object_mesh_layers(g)
+            .into_iter()
+            .flat_map(|(l, _)| {
+                g.layer_nodes(l)
+                    .filter_map(|m| g.parent(m))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        objects.sort_unstable();
+        objects.dedup();
+        SlamReplay {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            tick: 0,
+            agents,
+            places,
+            last_pose,
+            next_pose,
+            position,
+            waypoint: position,
+            rooms,
+            objects,
+            next_object: 100_000,
+        }
+    }
+
+    /// The newest agent pose and its position.
+    pub fn pose(&self) -> Option<(NodeId, Point)> {
+        self.last_pose.map(|p| (p, self.position))
+    }
+
+    /// Applies one tick of updates.
+    ///
+    /// # Errors
+    /// A refused mutation (which would mean the scene broke the layout's conventions);
+    /// the graph is left as the failing mutation found it.
+    pub fn step(&mut self, g: &mut SceneGraph) -> EditResult<StepReport> {
+        self.tick += 1;
+        let mut report = StepReport::default();
+        if let Some(agents) = self.agents {
+            self.append_pose(g, agents)?;
+            report.poses = 1;
+        }
+        if self.tick.is_multiple_of(MOVE_EVERY) && !self.objects.is_empty() {
+            let o = self.objects[self.rng.gen_range(0..self.objects.len())];
+            let d = [
+                self.rng.gen_range(-0.02..0.02),
+                self.rng.gen_range(-0.02..0.02),
+                0.0,
+            ];
+            for m in children(&*g, o) {
+                let moved: Vec<Point> = g
+                    .node(m)
+                    .map(|n| {
+                        g.points(n)
+                            .iter()
+                            .map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                g.set_geometry(m, moved)?;
+            }
+            report.objects_moved = 1;
+        }
+        if self.tick.is_multiple_of(MESH_EVERY) {
+            report.mesh_points = self.grow_mesh(g)?;
+        }
+        if self.tick.is_multiple_of(NEW_OBJECT_EVERY) {
+            report.objects_added = self.add_object(g)?;
+        }
+        Ok(report)
+    }
+
+    fn append_pose(&mut self, g: &mut SceneGraph, agents: LayerId) -> EditResult {
+        let to = [
+            self.waypoint[0] - self.position[0],
+            self.waypoint[1] - self.position[1],
+        ];
+        let dist = (to[0] * to[0] + to[1] * to[1]).sqrt();
+        if dist < STEP {
+            if let Some(&(_, b)) = self
+                .rooms
+                .get(self.rng.gen_range(0..self.rooms.len().max(1)))
+            {
+                self.waypoint = [
+                    self.rng.gen_range(b[0]..=b[3]),
+                    self.rng.gen_range(b[1]..=b[4]),
+                    1.0,
+                ];
+            }
+        } else {
+            self.position = [
+                self.position[0] + to[0] / dist * STEP,
+                self.position[1] + to[1] / dist * STEP,
+                1.0,
+            ];
+        }
+        let id = NodeId(NodeSymbol::new(b'a', self.next_pose).0);
+        self.next_pose += 1;
+        g.add_node(id, agents)?;
+        g.set_geometry(id, vec![self.position])?;
+        g.set_feature(
+            id,
+            "timestamp_ns",
+            FeatureValue::Int((self.tick * 33_333_333) as i64),
+        )?;
+        if let Some(prev) = self.last_pose.filter(|p| g.node(*p).is_some()) {
+            g.add_edge(prev, id, "odometry")?;
+        }
+        if let Some(places) = self.places {
+            let near =
+                nearest_nodes(&*g, Scope::Layer(places), self.position, 1).unwrap_or_default();
+            if let Some(&(place, _)) = near.first() {
+                // Nesting needs a places -> agents layer edge; scenes without one skip it.
+                let _ = g.nest(place, id);
+            }
+        }
+        self.last_pose = Some(id);
+        Ok(())
+    }
+
+    /// Appends a patch of mesh points to one room's unclaimed mesh (rooms in turn).
+    fn grow_mesh(&mut self, g: &mut SceneGraph) -> EditResult<u32> {
+        if self.rooms.is_empty() {
+            return Ok(0);
+        }
+        let (room, b) = self.rooms[(self.tick / MESH_EVERY) as usize % self.rooms.len()];
+        let target = g
+            .layer_by_name(&format!("room:{}/unclaimed-mesh", room.0))
+            .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
+        let Some(target) = target else { return Ok(0) };
+        let mut points = g
+            .node(target)
+            .map(|n| g.points(n).to_vec())
+            .unwrap_or_default();
+        let n = 64;
+        for _ in 0..n {
+            points.push([
+                self.rng.gen_range(b[0]..=b[3]),
+                self.rng.gen_range(b[1]..=b[4]),
+                self.rng.gen_range(0.0..3.0),
+            ]);
+        }
+        g.set_geometry(target, points)?;
+        Ok(n)
+    }
+
+    /// Adds an object with a small mesh in a random room (per-room layouts only).
+    fn add_object(&mut self, g: &mut SceneGraph) -> EditResult<u32> {
+        if self.rooms.is_empty() {
+            return Ok(0);
+        }
+        let (room, b) = self.rooms[self.rng.gen_range(0..self.rooms.len())];
+        let (Some(objects), Some(mesh)) = (
+            g.layer_by_name(&layout::claimed_object_layer_name(room)),
+            g.layer_by_name(&layout::claimed_mesh_layer_name(room)),
+        ) else {
+            return Ok(0);
+        };
+        let claimed = g
+            .layer_by_name(&format!("room:{}", room.0))
+            .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
+        let Some(claimed) = claimed else { return Ok(0) };
+        let object = NodeId(NodeSymbol::new(b'O', self.next_object).0);
+        let mesh_node = NodeId(0xF5 << 56 | self.next_object);
+        self.next_object += 1;
+        let centre = [
+            self.rng.gen_range(b[0]..=b[3]),
+            self.rng.gen_range(b[1]..=b[4]),
+            self.rng.gen_range(0.3..2.0),
+        ];
+        let points: Vec<Point> = (0..48)
+            .map(|_| [0, 1, 2].map(|a| centre[a] + self.rng.gen_range(-0.15f32..0.15)))
+            .collect();
+        let label = ["chair", "plant", "box", "person"][self.rng.gen_range(0..4)];
+        g.add_node(object, objects)?;
+        g.add_label(object, label)?;
+        g.nest(claimed, object)?;
+        g.add_node(mesh_node, mesh)?;
+        g.set_geometry(mesh_node, points)?;
+        g.nest(object, mesh_node)?;
+        if query::parent(&*g, object).is_some() {
+            self.objects.push(object);
+        }
+        Ok(1)
+    }
+}
