@@ -123,3 +123,42 @@ pub fn nudge(g: &mut SceneGraph, id: NodeId, tick: u64) -> Res<()> {
     g.set_geometry(id, points)?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sized_layers_come_close_to_their_target() {
+        for target in [1_000usize, 100_000, 1_000_000] {
+            let (g, _) = sized_layer(target).unwrap();
+            let bytes = archived_bytes(&g) as f64;
+            let off = (bytes - target as f64).abs() / target as f64;
+            // The manifest (a few hundred bytes) is included: loose for the smallest.
+            assert!(
+                off < if target < 10_000 { 0.8 } else { 0.05 },
+                "{target}: {bytes}"
+            );
+        }
+    }
+
+    #[test]
+    fn an_agent_move_changes_one_layer_and_a_touch_all_of_them() {
+        let mut g = office(&office_dsg(0.05), Layout::Mint).unwrap();
+        let generations = |g: &SceneGraph| -> Vec<Option<u64>> {
+            g.layers().map(|l| g.layer_generation(l)).collect()
+        };
+        let changed =
+            |a: &[Option<u64>], b: &[Option<u64>]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+        let before = generations(&g);
+        let mut mover = AgentMover::new(&g).unwrap();
+        mover.step(&mut g).unwrap();
+        let after = generations(&g);
+        assert_eq!(changed(&before, &after), 1);
+        for tick in 0..2 {
+            let before = generations(&g);
+            touch_all_layers(&mut g, tick).unwrap();
+            assert_eq!(changed(&before, &generations(&g)), before.len());
+        }
+    }
+}

@@ -190,3 +190,18 @@ impl Drop for SocketServer {
         let _ = std::fs::remove_file(&self.path);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plain_graph_survives_postcard() {
+        let (g, _) = super::super::scenes::small().unwrap();
+        let plain = PlainGraph::from_view(&g);
+        let bytes = postcard::to_allocvec(&plain).unwrap();
+        let back: PlainGraph = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back.node_count(), g.node_count());
+        assert_eq!(back.layers[0].nodes[3].points, vec![[3.0, 0.0, 1.0]]);
+    }
+}
