@@ -7,7 +7,7 @@
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 use ygg_store::query::nodes_with_label;
-use ygg_store::{NodeId, SceneGraph, Scope, SnapshotFile};
+use ygg_store::{NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
 /// Rooms (with boxes when `boxes`) nesting `n` objects of one point each; labels
 /// "common" on every 2nd object, "rare" on one.
@@ -151,6 +151,21 @@ fn segments(c: &mut Criterion) {
         });
         group.bench_function(format!("archive_into/{name}"), |b| {
             b.iter(|| segment.archive_into(&mut buf).unwrap())
+        });
+        // The writer's path: one node of the layer moved, then its segment rebuilt
+        // from the previous one (only the changed rows).
+        let mut live = g.clone();
+        let moved = NodeId(segment.ids[segment.ids.len() / 2]);
+        let at = live.points(live.node(moved).unwrap()).to_vec();
+        let mut step = 0u32;
+        group.bench_function(format!("cached_after_move/{name}"), |b| {
+            b.iter(|| {
+                step += 1;
+                let dx = if step.is_multiple_of(2) { 0.0 } else { 0.01 };
+                let points = at.iter().map(|p| [p[0] + dx, p[1], p[2]]).collect();
+                live.set_geometry(moved, points).unwrap();
+                live.cached_layer_segment(layer).ids.len()
+            })
         });
         segment.archive_into(&mut buf).unwrap();
         group.bench_function(format!("validate/{name}"), |b| {

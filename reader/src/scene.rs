@@ -66,7 +66,8 @@ impl SceneSnapshot {
             // SAFETY: as above, each layer's bytes were validated before `accept` returned.
             .map(|(_, bytes)| unsafe { layer_unchecked(bytes) })
             .collect();
-        ArchivedScene::new(manifest, layers).expect("checked when the snapshot was accepted")
+        // `accept` ran `ArchivedScene::new` on this cut.
+        ArchivedScene::new_prechecked(manifest, layers)
     }
 
     /// The snapshot generation.

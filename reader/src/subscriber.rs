@@ -382,13 +382,29 @@ impl SegmentSubscriber {
             }
         }
 
-        // 3. Layer segments.
+        // 3. Layer segments, from the layers whose segment the pending manifest wants and
+        //    that is not at hand yet (segments of other layers wait in their queues, where
+        //    the writer's next sample would replace them).
+        let current = self.current.as_deref();
         for (&layer_id, layer) in &mut self.layers {
             // The generation the pending manifest wants from this layer, if any.
-            let wanted = self.pending_manifest.as_ref().and_then(|m| {
+            let Some(wanted) = self.pending_manifest.as_ref().and_then(|m| {
                 let entry = m.entries.iter().find(|e| e.layer_id == layer_id)?;
                 Some((m.segment.header().session, entry.generation))
-            });
+            }) else {
+                continue;
+            };
+            let is_wanted = |s: &HeldSegment| (s.header().session, s.header().generation) == wanted;
+            let at_hand = layer.pending.iter().any(|s| is_wanted(s))
+                || current.is_some_and(|c| {
+                    c.layers
+                        .iter()
+                        .any(|l| l.entry.layer_id == layer_id && is_wanted(&l.segment))
+                });
+            if at_hand {
+                continue;
+            }
+            let wanted = Some(wanted);
             let port = &layer.port;
             let pending = &mut layer.pending;
             let error = drain(port, |sample| {

@@ -6,7 +6,7 @@
 //! box recomputed from the sub-tree. Floors, walls and ceilings put many points on one
 //! face, so a count rarely reaches zero.
 
-use crate::graph::{Node, SceneGraph};
+use crate::graph::{Change, Node, SceneGraph};
 use crate::{Aabb, NodeId, Point};
 
 /// Adds points to an enabled box; returns whether the box changed.
@@ -94,7 +94,7 @@ impl SceneGraph {
         node.face_counts = [0; 6];
         add_points(node, &points);
         let layer = node.layer;
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
     }
 
     /// Applies a change of sub-tree points (`removed` left, `added` joined) to every
@@ -111,7 +111,7 @@ impl SceneGraph {
                 self.recompute_box(n);
             } else if add_points(node, added) {
                 let layer = node.layer;
-                self.touch_layer(layer);
+                self.touch_layer(layer, Change::Node(n));
             }
         }
     }

@@ -54,6 +54,46 @@ pub(crate) struct Layer {
     pub(crate) generation: u64,
     pub(crate) label_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
     pub(crate) key_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
+    /// The last segment built by [`SceneGraph::cached_layer_segment`] and what changed
+    /// since.
+    pub(crate) cache: crate::segment_cache::CachedSegment,
+}
+
+impl Layer {
+    /// The smallest and largest node id (`u64::MAX` and 0 when empty), from the cached
+    /// segment when it is current.
+    pub(crate) fn id_bounds(&self) -> (u64, u64) {
+        match self.cache.at_generation(self.generation) {
+            Some(segment) => (
+                segment.ids.first().copied().unwrap_or(u64::MAX),
+                segment.ids.last().copied().unwrap_or(0),
+            ),
+            None => self
+                .nodes
+                .iter()
+                .fold((u64::MAX, 0), |(lo, hi), n| (lo.min(n.0), hi.max(n.0))),
+        }
+    }
+
+    /// Records a change of the layer's archived content: bumps the generation and, when
+    /// a cached segment exists, notes what to rebuild.
+    pub(crate) fn touch(&mut self, change: Change) {
+        self.generation += 1;
+        self.cache.record(change, self.nodes.len());
+    }
+}
+
+/// What a mutation changed in a layer, for the incremental segment builder.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Change {
+    /// Anything: rows may have shifted (a node removed, an index enabled or disabled).
+    All,
+    /// This node's row (edges, nesting, labels, features, box; or a new node).
+    Node(NodeId),
+    /// This node's points (its row and the layer index).
+    Geometry(NodeId),
+    /// The node index rooted at this node.
+    IndexRoot(NodeId),
 }
 
 /// A layered 3D scene graph that can be edited: the writer's live graph.
@@ -72,6 +112,10 @@ pub struct SceneGraph {
     pub(crate) key_layers: FxHashMap<Sym, Vec<LayerId>>,
     /// Incremented when the layer set or the DAG changes.
     pub(crate) structure_generation: u64,
+    /// Incremented when `label_layers` or `key_layers` changes.
+    pub(crate) terms_generation: u64,
+    /// The last manifest built by [`SceneGraph::cached_manifest`].
+    pub(crate) manifest_cache: crate::segment_cache::CachedManifest,
     /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
     pub(crate) indexes: crate::index::LiveIndexes,
 }
@@ -112,9 +156,9 @@ impl SceneGraph {
         self.nodes.get(&id).ok_or(GraphEditError::UnknownNode(id))
     }
 
-    pub(crate) fn touch_layer(&mut self, layer: LayerId) {
+    pub(crate) fn touch_layer(&mut self, layer: LayerId, change: Change) {
         if let Some(l) = self.layers.get_mut(&layer) {
-            l.generation += 1;
+            l.touch(change);
         }
     }
 
@@ -145,6 +189,7 @@ impl SceneGraph {
                 generation: 1,
                 label_postings: FxHashMap::default(),
                 key_postings: FxHashMap::default(),
+                cache: Default::default(),
             },
         );
         self.layer_names.insert(name.to_owned(), id);
@@ -297,7 +342,7 @@ impl SceneGraph {
         };
         let slot = l.nodes.len() as u32;
         l.nodes.push(id);
-        l.generation += 1;
+        l.touch(Change::Node(id));
         entry.insert(Node {
             id,
             layer,
@@ -353,7 +398,7 @@ impl SceneGraph {
         if let Some(&moved) = layer.nodes.get(node.slot as usize) {
             self.nodes.get_mut(&moved).expect("listed").slot = node.slot;
         }
-        layer.generation += 1;
+        layer.touch(Change::All);
         self.index_node_removed(&node);
         Ok(())
     }
@@ -371,7 +416,7 @@ impl SceneGraph {
         let node = self.nodes.get_mut(&id).expect("checked");
         let old = std::mem::replace(&mut node.points, points);
         let layer = node.layer;
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Geometry(id));
         self.geometry_changed(id, &old);
         self.index_geometry_changed(id, &old);
         Ok(())
@@ -407,7 +452,7 @@ impl SceneGraph {
                 self.post(layer, Postings::Key, k, id);
             }
         }
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
         Ok(())
     }
 
@@ -428,7 +473,7 @@ impl SceneGraph {
         node.features.remove(at);
         let layer = node.layer;
         self.unpost(layer, Postings::Key, k, id);
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
         Ok(())
     }
 
@@ -443,7 +488,7 @@ impl SceneGraph {
         node.labels.push(s);
         let layer = node.layer;
         self.post(layer, Postings::Label, s, id);
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
         Ok(())
     }
 
@@ -464,7 +509,7 @@ impl SceneGraph {
         node.labels.remove(at);
         let layer = node.layer;
         self.unpost(layer, Postings::Label, s, id);
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
         Ok(())
     }
 
@@ -477,6 +522,7 @@ impl SceneGraph {
         let set = map.entry(term).or_default();
         if set.is_empty() {
             graph_map.entry(term).or_default().push(layer);
+            self.terms_generation += 1;
         }
         set.insert(id);
     }
@@ -493,6 +539,7 @@ impl SceneGraph {
         set.remove(&id);
         if set.is_empty() {
             map.remove(&term);
+            self.terms_generation += 1;
             if let Some(ls) = graph_map.get_mut(&term) {
                 ls.retain(|&x| x != layer);
                 if ls.is_empty() {
@@ -542,7 +589,8 @@ impl SceneGraph {
             .binary_search_by_key(&source, |e| e.0)
             .unwrap_or_else(|e| e);
         t.in_edges.insert(at, (source, d));
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(source));
+        self.touch_layer(layer, Change::Node(target));
         Ok(())
     }
 
@@ -569,7 +617,8 @@ impl SceneGraph {
             .binary_search_by_key(&source, |e| e.0)
             .expect("mirrored edge");
         t.in_edges.remove(at);
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(source));
+        self.touch_layer(layer, Change::Node(target));
         Ok(())
     }
 
@@ -599,8 +648,8 @@ impl SceneGraph {
         let at = p.children.binary_search(&child).unwrap_or_else(|e| e);
         p.children.insert(at, child);
         self.nodes.get_mut(&child).expect("checked").parent = Some(parent);
-        self.touch_layer(pl);
-        self.touch_layer(cl);
+        self.touch_layer(pl, Change::Node(parent));
+        self.touch_layer(cl, Change::Node(child));
         self.subtree_joined(parent, child);
         self.index_nested(parent, child);
         Ok(())
@@ -616,8 +665,8 @@ impl SceneGraph {
         let at = p.children.binary_search(&child).expect("mirrored nesting");
         p.children.remove(at);
         let pl = p.layer;
-        self.touch_layer(pl);
-        self.touch_layer(cl);
+        self.touch_layer(pl, Change::Node(parent));
+        self.touch_layer(cl, Change::Node(child));
         self.subtree_left(parent, child);
         self.index_unnested(parent, child);
         Ok(())
@@ -647,7 +696,7 @@ impl SceneGraph {
         node.bbox_enabled = false;
         node.aabb = None;
         let layer = node.layer;
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::Node(id));
         Ok(())
     }
 

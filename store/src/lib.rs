@@ -23,6 +23,7 @@ pub mod layout;
 mod live_view;
 pub mod objects;
 pub mod query;
+mod segment_cache;
 pub mod snapshot;
 mod view;
 

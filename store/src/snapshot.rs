@@ -30,7 +30,7 @@
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
 use crate::index::{ArchivedIndex, KdTree, SpatialIndex, check_tree};
 use crate::view::{EdgeRef, SceneView};
-use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, SceneGraph, SnapshotError};
+use crate::{Aabb, FeatureRef, LayerId, Node, NodeId, Point, SceneGraph, SnapshotError};
 use rkyv::collections::swiss_table::ArchivedHashMap;
 use rkyv::string::ArchivedString;
 use rkyv::vec::ArchivedVec;
@@ -159,8 +159,8 @@ pub struct Manifest {
     pub version: u32,
     /// Generation of the whole cut (increases with every publish).
     pub generation: u64,
-    /// When the writer published this cut: nanoseconds since the Unix epoch (0 for a
-    /// file). Readers on the same host subtract it from their clock to measure
+    /// When the writer began publishing this cut: nanoseconds since the Unix epoch (0
+    /// for a file). Readers on the same host subtract it from their clock to measure
     /// publish-to-visible latency.
     pub published_unix_ns: u64,
     /// Layers, ascending by id.
@@ -173,16 +173,18 @@ pub struct Manifest {
 
 // ---- archiving the live graph ---------------------------------------------------------
 
-struct StringTable {
+/// Maps graph symbols to indexes in a layer segment's string table.
+#[derive(Debug, Default)]
+pub(crate) struct StringTable {
     index: rustc_hash::FxHashMap<u32, u32>,
-    strings: Vec<String>,
 }
 
 impl StringTable {
-    fn get(&mut self, g: &SceneGraph, sym: u32) -> u32 {
+    /// The index of `sym` in `strings`, appending the string on first use.
+    fn get(&mut self, g: &SceneGraph, sym: u32, strings: &mut Vec<String>) -> u32 {
         *self.index.entry(sym).or_insert_with(|| {
-            self.strings.push(g.strings.resolve(sym).to_owned());
-            (self.strings.len() - 1) as u32
+            strings.push(g.strings.resolve(sym).to_owned());
+            (strings.len() - 1) as u32
         })
     }
 }
@@ -191,101 +193,148 @@ fn push_offset(offsets: &mut Vec<u32>, len: usize) {
     offsets.push(u32::try_from(len).expect("a layer column holds fewer than 2^32 entries"));
 }
 
+impl LayerSegment {
+    /// A segment with no rows yet: header fields set, every offset column at `[0]`.
+    pub(crate) fn empty(layer: LayerId, generation: u64, name: &str, rows: usize) -> Self {
+        let mut s = LayerSegment {
+            version: FORMAT_VERSION,
+            layer: layer.0,
+            generation,
+            name: name.to_owned(),
+            ..Default::default()
+        };
+        for o in s.offset_columns_mut() {
+            o.reserve(rows + 1);
+            o.push(0);
+        }
+        s.parents.reserve(rows);
+        s
+    }
+
+    /// The CSR offset columns.
+    fn offset_columns_mut(&mut self) -> [&mut Vec<u32>; 6] {
+        [
+            &mut self.point_offsets,
+            &mut self.child_offsets,
+            &mut self.out_offsets,
+            &mut self.in_offsets,
+            &mut self.label_offsets,
+            &mut self.feature_offsets,
+        ]
+    }
+
+    /// Rebuilds the label and key postings from the label and feature-key columns.
+    pub(crate) fn rebuild_postings(&mut self) {
+        let rows = self.ids.len();
+        for (offsets, terms, index, postings) in [
+            (
+                &self.label_offsets,
+                &self.labels,
+                &mut self.label_index,
+                &mut self.label_postings,
+            ),
+            (
+                &self.feature_offsets,
+                &self.feature_keys,
+                &mut self.key_index,
+                &mut self.key_postings,
+            ),
+        ] {
+            let mut rows_by_term: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+            for row in 0..rows {
+                for &term in &terms[offsets[row] as usize..offsets[row + 1] as usize] {
+                    rows_by_term.entry(term).or_default().push(row as u32);
+                }
+            }
+            index.clear();
+            postings.clear();
+            for (term, rows) in rows_by_term {
+                let start = postings.len() as u32;
+                postings.extend(rows);
+                index.insert(
+                    self.strings[term as usize].clone(),
+                    [start, postings.len() as u32],
+                );
+            }
+        }
+    }
+}
+
 impl SceneGraph {
     /// Builds the archived columns of one layer.
     ///
     /// # Panics
     /// If `layer` does not exist.
     pub fn layer_segment(&self, layer: LayerId) -> LayerSegment {
+        self.build_layer_segment(layer).0
+    }
+
+    /// [`SceneGraph::layer_segment`], also returning the symbol map of its string table.
+    pub(crate) fn build_layer_segment(&self, layer: LayerId) -> (LayerSegment, StringTable) {
         let l = &self.layers[&layer];
         let mut ids: Vec<u64> = l.nodes.iter().map(|n| n.0).collect();
         ids.sort_unstable();
-        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
-        let mut st = StringTable {
-            index: rustc_hash::FxHashMap::default(),
-            strings: Vec::new(),
-        };
-        let mut s = LayerSegment {
-            version: FORMAT_VERSION,
-            layer: layer.0,
-            generation: l.generation,
-            name: l.name.clone(),
-            ..Default::default()
-        };
-        for o in [
-            &mut s.point_offsets,
-            &mut s.child_offsets,
-            &mut s.out_offsets,
-            &mut s.in_offsets,
-            &mut s.label_offsets,
-            &mut s.feature_offsets,
-        ] {
-            o.reserve(ids.len() + 1);
-            o.push(0);
-        }
-        s.parents.reserve(ids.len());
-        let mut label_rows: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-        let mut key_rows: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        let mut st = StringTable::default();
+        let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
         for (row, &id) in ids.iter().enumerate() {
-            let n = &self.nodes[&NodeId(id)];
-            s.points.extend_from_slice(&n.points);
-            push_offset(&mut s.point_offsets, s.points.len());
-            s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
-            s.children.extend(n.children.iter().map(|c| c.0));
-            push_offset(&mut s.child_offsets, s.children.len());
-            for &(t, d) in &n.out_edges {
-                s.out_targets.push(row_of(t));
-                s.out_descriptions.push(st.get(self, d));
-            }
-            push_offset(&mut s.out_offsets, s.out_targets.len());
-            for &(src, d) in &n.in_edges {
-                s.in_sources.push(row_of(src));
-                s.in_descriptions.push(st.get(self, d));
-            }
-            push_offset(&mut s.in_offsets, s.in_sources.len());
-            for &lab in &n.labels {
-                let i = st.get(self, lab);
-                s.labels.push(i);
-                label_rows.entry(i).or_default().push(row as u32);
-            }
-            push_offset(&mut s.label_offsets, s.labels.len());
-            for &(k, v) in &n.features {
-                let ki = st.get(self, k);
-                s.feature_keys.push(ki);
-                key_rows.entry(ki).or_default().push(row as u32);
-                let (kind, bits) = match v {
-                    StoredValue::Str(sym) => (FEATURE_STR, u64::from(st.get(self, sym))),
-                    StoredValue::Int(v) => (FEATURE_INT, v as u64),
-                    StoredValue::Float(v) => (FEATURE_FLOAT, v.to_bits()),
-                    StoredValue::Bool(v) => (FEATURE_BOOL, u64::from(v)),
-                };
-                s.feature_kinds.push(kind);
-                s.feature_bits.push(bits);
-            }
-            push_offset(&mut s.feature_offsets, s.feature_keys.len());
-            if let (true, Some(b)) = (n.bbox_enabled, n.aabb) {
-                s.aabb_rows.push(row as u32);
-                s.aabbs.push(b.to_array());
-            }
+            self.push_row(&mut s, &mut st, &self.nodes[&NodeId(id)], row as u32, &ids);
         }
-        for (rows_by_term, index, postings) in [
-            (label_rows, &mut s.label_index, &mut s.label_postings),
-            (key_rows, &mut s.key_index, &mut s.key_postings),
-        ] {
-            for (term, rows) in rows_by_term {
-                let start = postings.len() as u32;
-                postings.extend(rows);
-                index.insert(
-                    st.strings[term as usize].clone(),
-                    [start, postings.len() as u32],
-                );
-            }
-        }
-        s.strings = st.strings;
-        s.layer_index = self.archived_layer_index(layer, &ids);
-        s.node_indexes = self.archived_node_indexes(layer);
         s.ids = ids;
-        s
+        s.rebuild_postings();
+        s.layer_index = self.archived_layer_index(layer, &s);
+        s.node_indexes = self.archived_node_indexes(layer);
+        (s, st)
+    }
+
+    /// Appends node `n` as row `row` to every per-row column of `s` (not `ids`, the
+    /// postings or the spatial indexes). `ids` are the segment's sorted node ids, for
+    /// edge rows.
+    pub(crate) fn push_row(
+        &self,
+        s: &mut LayerSegment,
+        st: &mut StringTable,
+        n: &Node,
+        row: u32,
+        ids: &[u64],
+    ) {
+        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
+        s.points.extend_from_slice(&n.points);
+        push_offset(&mut s.point_offsets, s.points.len());
+        s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
+        s.children.extend(n.children.iter().map(|c| c.0));
+        push_offset(&mut s.child_offsets, s.children.len());
+        for &(t, d) in &n.out_edges {
+            s.out_targets.push(row_of(t));
+            s.out_descriptions.push(st.get(self, d, &mut s.strings));
+        }
+        push_offset(&mut s.out_offsets, s.out_targets.len());
+        for &(src, d) in &n.in_edges {
+            s.in_sources.push(row_of(src));
+            s.in_descriptions.push(st.get(self, d, &mut s.strings));
+        }
+        push_offset(&mut s.in_offsets, s.in_sources.len());
+        for &lab in &n.labels {
+            s.labels.push(st.get(self, lab, &mut s.strings));
+        }
+        push_offset(&mut s.label_offsets, s.labels.len());
+        for &(k, v) in &n.features {
+            s.feature_keys.push(st.get(self, k, &mut s.strings));
+            let (kind, bits) = match v {
+                StoredValue::Str(sym) => {
+                    (FEATURE_STR, u64::from(st.get(self, sym, &mut s.strings)))
+                }
+                StoredValue::Int(v) => (FEATURE_INT, v as u64),
+                StoredValue::Float(v) => (FEATURE_FLOAT, v.to_bits()),
+                StoredValue::Bool(v) => (FEATURE_BOOL, u64::from(v)),
+            };
+            s.feature_kinds.push(kind);
+            s.feature_bits.push(bits);
+        }
+        push_offset(&mut s.feature_offsets, s.feature_keys.len());
+        if let (true, Some(b)) = (n.bbox_enabled, n.aabb) {
+            s.aabb_rows.push(row);
+            s.aabbs.push(b.to_array());
+        }
     }
 
     /// Builds the manifest of the current graph (every layer at its current generation).
@@ -298,13 +347,14 @@ impl SceneGraph {
                 let mut children: Vec<u32> = l.children.iter().map(|c| c.0).collect();
                 parents.sort_unstable();
                 children.sort_unstable();
+                let (min_id, max_id) = l.id_bounds();
                 ManifestLayer {
                     id: id.0,
                     name: l.name.clone(),
                     generation: l.generation,
                     node_count: l.nodes.len() as u64,
-                    min_id: l.nodes.iter().map(|n| n.0).min().unwrap_or(u64::MAX),
-                    max_id: l.nodes.iter().map(|n| n.0).max().unwrap_or(0),
+                    min_id,
+                    max_id,
                     parents,
                     children,
                 }
@@ -646,7 +696,8 @@ impl SnapshotFile {
             // SAFETY: as above, each range was validated as an `ArchivedLayerSegment`.
             .map(|r| unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(&data[r.clone()]) })
             .collect();
-        ArchivedScene::new(manifest, layers).expect("checked at open")
+        // `from_backing` ran `ArchivedScene::new` on this cut.
+        ArchivedScene::new_prechecked(manifest, layers)
     }
 
     /// Size of the file in bytes.
@@ -1027,6 +1078,17 @@ impl<'a> ArchivedScene<'a> {
             }
         }
         Ok(ArchivedScene { manifest, layers })
+    }
+
+    /// Joins a manifest with its layer segments that [`ArchivedScene::new`] already
+    /// accepted, without checking them again (a reader builds a view per query on a
+    /// snapshot it checked once). Given a cut `new` would refuse, queries may panic or
+    /// answer wrongly, but stay memory-safe.
+    pub fn new_prechecked(
+        manifest: &'a ArchivedManifest,
+        layers: Vec<&'a ArchivedLayerSegment>,
+    ) -> Self {
+        ArchivedScene { manifest, layers }
     }
 
     /// The manifest's generation.

@@ -84,20 +84,25 @@ impl SceneWriter {
         self.generation
     }
 
-    /// Publishes every changed layer and then the manifest of the new cut.
+    /// Publishes every changed layer and then the manifest of the new cut, stamped with
+    /// the time this call began (so readers' publish-to-visible latency includes the
+    /// archiving). Segments are built incrementally
+    /// ([`SceneGraph::cached_layer_segment`]): a small change to a large layer re-archives
+    /// that layer but rebuilds only the changed rows.
     ///
     /// # Errors
     /// [`PublishError::SharedMemoryFull`] before anything is written when `/dev/shm`
     /// lacks room, and the other transport errors. On error the previous snapshot stays
     /// the current one for readers.
     pub fn publish(&mut self) -> Result<PublishReport, PublishError> {
+        let started_unix_ns = unix_ns();
         let mut report = PublishReport::default();
         let mut entries = Vec::new();
         let layers: Vec<_> = self.graph.layers().collect();
         for layer in &layers {
             let generation = self.graph.layer_generation(*layer).expect("listed layer");
             if self.publisher.layer_generation(layer.0) != Some(generation) {
-                let segment = self.graph.layer_segment(*layer);
+                let segment = self.graph.cached_layer_segment(*layer);
                 let len = segment.archived_len();
                 self.publisher
                     .try_publish_layer(layer.0, generation, len, |buf| {
@@ -119,8 +124,7 @@ impl SceneWriter {
         }
         self.published_layers = live;
         let generation = self.generation + 1;
-        let mut manifest = self.graph.manifest(generation);
-        manifest.published_unix_ns = unix_ns();
+        let manifest = self.graph.cached_manifest(generation, started_unix_ns);
         let len = manifest.archived_len();
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {

@@ -334,8 +334,8 @@ struct Publish {
     bytes: usize,
 }
 
-/// Per reader: generation -> (manifest stamp, visible, answered), Unix ns.
-type Seen = HashMap<u64, [u64; 3]>;
+/// Per reader: generation -> (visible, answered), Unix ns.
+type Seen = HashMap<u64, [u64; 2]>;
 
 /// A tiny deterministic jitter source (±25 %) so publishes do not lock into phase with
 /// periodic activity (liveness checks, timers).
@@ -398,10 +398,10 @@ fn drive(
                 Some("end") => break,
                 Some("seen") => {
                     let v: Vec<u64> = it.filter_map(|x| x.parse().ok()).collect();
-                    let [g, s, vis, ans] = v[..] else {
+                    let [g, vis, ans] = v[..] else {
                         return Err(format!("malformed reader line {line:?}").into());
                     };
-                    map.insert(g, [s, vis, ans]);
+                    map.insert(g, [vis, ans]);
                 }
                 _ => return Err(format!("unexpected reader line {line:?}").into()),
             }
@@ -420,8 +420,9 @@ struct Observed {
     all_visible: Vec<f64>,
     /// Publish call -> first query answered in every reader, per publish.
     all_answered: Vec<f64>,
-    /// Manifest stamp -> visible, every reader and publish.
-    stamp: Vec<f64>,
+    /// `publish()` returned -> visible (transport, wake-up, validation), every reader
+    /// and publish.
+    returned: Vec<f64>,
     /// Duration of `publish()`.
     publish: Vec<f64>,
     /// (reader, publish) pairs a slow reader skipped: timed to the newer snapshot that
@@ -436,10 +437,10 @@ struct Observed {
 
 fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
     // Per reader, the snapshots it held, by generation.
-    let sorted: Vec<Vec<(u64, [u64; 3])>> = seen
+    let sorted: Vec<Vec<(u64, [u64; 2])>> = seen
         .iter()
         .map(|s| {
-            let mut v: Vec<(u64, [u64; 3])> = s.iter().map(|(g, t)| (*g, *t)).collect();
+            let mut v: Vec<(u64, [u64; 2])> = s.iter().map(|(g, t)| (*g, *t)).collect();
             v.sort_unstable_by_key(|(g, _)| *g);
             v
         })
@@ -456,12 +457,12 @@ fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
             // (when a slow reader skipped it) the next newer one.
             let i = s.partition_point(|(g, _)| *g < p.generation);
             match s.get(i) {
-                Some(&(g, [stamp, vis, ans])) => {
+                Some(&(g, [vis, ans])) => {
                     if g != p.generation {
                         o.coalesced += 1;
                     }
                     o.visible.push(vis.saturating_sub(p.t0) as f64);
-                    o.stamp.push(vis.saturating_sub(stamp) as f64);
+                    o.returned.push(vis.saturating_sub(p.t1) as f64);
                     slowest = slowest.map(|(v, a)| {
                         (
                             v.max(vis.saturating_sub(p.t0)),
@@ -486,10 +487,10 @@ fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
 impl Observed {
     /// Adds the common extra numbers to `row`.
     fn annotate(&self, mut row: Row) -> Row {
-        let (sm, sp) = median_p99_us(&self.stamp);
+        let (sm, sp) = median_p99_us(&self.returned);
         row = row
-            .with("stamp_median_us", sm)
-            .with("stamp_p99_us", sp)
+            .with("returned_median_us", sm)
+            .with("returned_p99_us", sp)
             .with("publish_call_us", median_p99_us(&self.publish).0)
             .with("bytes_per_publish", median(&self.bytes))
             .with("skipped_by_slow_reader", self.coalesced as f64);
@@ -1036,13 +1037,13 @@ mod tests {
         let publishes = [publish(1, 1_000), publish(2, 2_000), publish(3, 3_000)];
         // Reader 0 saw every publish; reader 1 skipped generation 2.
         let r0: Seen = [
-            (1, [1_005, 1_100, 1_200]),
-            (2, [2_005, 2_100, 2_200]),
-            (3, [3_005, 3_100, 3_200]),
+            (1, [1_100, 1_200]),
+            (2, [2_100, 2_200]),
+            (3, [3_100, 3_200]),
         ]
         .into_iter()
         .collect();
-        let r1: Seen = [(1, [1_005, 1_300, 1_400]), (3, [3_005, 3_500, 3_600])]
+        let r1: Seen = [(1, [1_300, 1_400]), (3, [3_500, 3_600])]
             .into_iter()
             .collect();
         let o = observe(&publishes, &[r0, r1]);
@@ -1051,5 +1052,7 @@ mod tests {
         assert_eq!(o.all_visible, vec![300.0, 1_500.0, 500.0]);
         assert_eq!(o.all_answered, vec![400.0, 1_600.0, 600.0]);
         assert_eq!(o.visible.len(), 6);
+        // After publish() returned (t0 + 10): reader 0's first snapshot at 1_100.
+        assert_eq!(o.returned[0], 90.0);
     }
 }

@@ -8,8 +8,8 @@
 //! Latency is *publish-to-visible*: from the writer's `publish()` call (Unix ns, taken in
 //! the writer just before the call) to the reader holding the validated snapshot (Unix
 //! ns, taken in the reader; same host clock), and for the office cases to a first query
-//! answered on it. The manifest's own `published_unix_ns` (stamped after the layers are
-//! archived) gives the transport-and-validation part alone.
+//! answered on it. From `publish()` returning to visible is the transport-and-validation
+//! part alone.
 
 mod cases;
 mod child;

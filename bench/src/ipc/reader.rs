@@ -4,9 +4,9 @@
 //! snapshot, then obeys lines on stdin; stdin closing means "exit cleanly".
 //!
 //! * `latency`: blocks in [`SceneReader::wait_next`]; for each new snapshot records the
-//!   generation, the manifest stamp, the Unix time it held the validated view and (with
-//!   `--query-layer`) the time a nearest-node query on it was answered. `report` prints
-//!   the records as `seen <gen> <stamp> <visible> <answered>` lines and `end`.
+//!   generation, the Unix time it held the validated view and (with `--query-layer`)
+//!   the time a nearest-node query on it was answered. `report` prints the records as
+//!   `seen <gen> <visible> <answered>` lines and `end`.
 //! * `qps`: on `start`, loops `latest()` + nearest-node query on the newest snapshot until
 //!   `stop`, then prints `qps <queries> <elapsed ns> <median ns> <p99 ns> <snapshots>`.
 //! * `socket`: the Hydra-style baseline: reads length-prefixed frames from a Unix socket,
@@ -151,14 +151,14 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
     println!("ready {}", first.generation());
     drop(first);
     let mut points = Points(args.index as u64 + 1);
-    // (generation, manifest stamp, visible, answered)
-    let mut records: Vec<[u64; 4]> = Vec::with_capacity(4096);
+    // (generation, visible, answered)
+    let mut records: Vec<[u64; 3]> = Vec::with_capacity(4096);
     loop {
         match commands.try_recv() {
             Ok(Cmd::Report) => {
                 let mut out = std::io::stdout().lock();
-                for [g, s, v, a] in records.drain(..) {
-                    writeln!(out, "seen {g} {s} {v} {a}")?;
+                for [g, v, a] in records.drain(..) {
+                    writeln!(out, "seen {g} {v} {a}")?;
                 }
                 writeln!(out, "end")?;
                 out.flush()?;
@@ -170,7 +170,6 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
             Ok(Some(snapshot)) => {
                 let view = snapshot.view();
                 let visible = unix_ns();
-                let stamp = view.published_unix_ns();
                 let generation = view.generation();
                 let answered = match &args.query_layer {
                     Some(layer) => {
@@ -179,7 +178,7 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
                     }
                     None => visible,
                 };
-                records.push([generation, stamp, visible, answered]);
+                records.push([generation, visible, answered]);
             }
             Ok(None) => {}
             Err(SceneReceiveError::Receive(ReceiveError::Terminated)) => return Ok(()),

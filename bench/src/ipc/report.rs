@@ -273,12 +273,12 @@ pub fn targets(rows: &[Row]) -> Vec<Target> {
 }
 
 /// Where a publish-to-visible latency goes: the writer's `publish()` call against the
-/// manifest stamp → visible part (transport, wake-up, validation).
+/// part after it returned (transport, wake-up, validation).
 fn split(r: &Row) -> String {
     format!(
-        "writer publish() call p50 {}, manifest stamp → visible p50 {}",
+        "writer publish() call p50 {}, publish() returned → visible p50 {}",
         fmt_us(r.get("publish_call_us").unwrap_or(f64::NAN)),
-        fmt_us(r.get("stamp_median_us").unwrap_or(f64::NAN))
+        fmt_us(r.get("returned_median_us").unwrap_or(f64::NAN))
     )
 }
 
@@ -410,17 +410,17 @@ pub fn to_markdown(meta: &Meta, rows: &[Row], targets: &[Target]) -> String {
         md.push_str(&format!("| {} | {} | {met} |\n", t.text, t.measured));
     }
     md.push_str("\n## Results\n\nLatencies from the writer's `publish()` call unless the row says otherwise; ");
-    md.push_str("\"stamp→visible\" is from the manifest's `published_unix_ns` (taken after the layers are archived) to the validated snapshot: transport plus validation alone.\n\n");
-    md.push_str("| case | what | median | p99 | samples | rate | stamp→visible p50 | notes |\n|---|---|---|---|---|---|---|---|\n");
+    md.push_str("\"returned→visible\" is from the writer's `publish()` call returning to the validated snapshot in the reader: transport plus validation alone.\n\n");
+    md.push_str("| case | what | median | p99 | samples | rate | returned→visible p50 | notes |\n|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         let rate = match (r.value, r.unit) {
             (Some(v), Some(u)) => format!("{v:.0} {u}"),
             _ => String::new(),
         };
-        let stamp = r.get("stamp_median_us").map(fmt_us).unwrap_or_default();
+        let returned = r.get("returned_median_us").map(fmt_us).unwrap_or_default();
         let mut notes = Vec::new();
         for (k, v) in &r.extra {
-            if k == "stamp_median_us" {
+            if k == "returned_median_us" {
                 continue;
             }
             notes.push(format!("{k} {}", fmt_extra(k, *v)));
@@ -436,7 +436,7 @@ pub fn to_markdown(meta: &Meta, rows: &[Row], targets: &[Target]) -> String {
             fmt_us(r.p99_us),
             r.samples,
             rate,
-            stamp,
+            returned,
             notes.join(", ")
         ));
     }

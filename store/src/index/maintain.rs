@@ -14,8 +14,8 @@
 
 use super::{LiveIndex, LiveKdTree, build_tree};
 use crate::error::{EditResult, GraphEditError};
-use crate::graph::Node;
-use crate::snapshot::NodeIndexSegment;
+use crate::graph::{Change, Node};
+use crate::snapshot::{LayerSegment, NodeIndexSegment};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
@@ -124,7 +124,7 @@ impl SceneGraph {
         self.indexes
             .layers
             .insert(layer, LiveKdTree::from_entries(entries));
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::All);
         Ok(())
     }
 
@@ -137,7 +137,7 @@ impl SceneGraph {
             return Err(GraphEditError::UnknownLayer(layer));
         }
         if self.indexes.layers.remove(&layer).is_some() {
-            self.touch_layer(layer);
+            self.touch_layer(layer, Change::All);
         }
         Ok(())
     }
@@ -173,7 +173,7 @@ impl SceneGraph {
         self.indexes
             .nodes
             .insert(node, LiveKdTree::from_entries(entries));
-        self.touch_layer(layer);
+        self.touch_layer(layer, Change::All);
         Ok(())
     }
 
@@ -188,7 +188,7 @@ impl SceneGraph {
             .ok_or(GraphEditError::UnknownNode(node))?
             .layer;
         if self.indexes.nodes.remove(&node).is_some() {
-            self.touch_layer(layer);
+            self.touch_layer(layer, Change::All);
         }
         Ok(())
     }
@@ -241,16 +241,12 @@ impl SceneGraph {
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
             apply(t, h, old, new);
         }
-        let mut touched = Vec::new();
-        for r in roots {
+        for &r in &roots {
             apply(self.indexes.nodes.get_mut(&r).expect("listed"), h, old, new);
-            let rl = self.nodes[&r].layer;
-            if rl != layer {
-                touched.push(rl);
-            }
         }
-        for l in touched {
-            self.touch_layer(l);
+        for r in roots {
+            let rl = self.nodes[&r].layer;
+            self.touch_layer(rl, Change::IndexRoot(r));
         }
     }
 
@@ -289,7 +285,7 @@ impl SceneGraph {
                 }
             }
             let rl = self.nodes[&r].layer;
-            self.touch_layer(rl);
+            self.touch_layer(rl, Change::IndexRoot(r));
         }
     }
 
@@ -312,19 +308,18 @@ impl SceneGraph {
         self.indexes.layers.remove(&layer);
     }
 
-    /// The index of `layer` for a snapshot: a kd-tree over the layer's points whose
-    /// items are rows (ranks of node ids in `ids`, the layer's sorted ids).
+    /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of
+    /// `segment` (the layer's columns) whose items are rows.
     pub(crate) fn archived_layer_index(
         &self,
         layer: LayerId,
-        ids: &[u64],
+        segment: &LayerSegment,
     ) -> Option<crate::index::KdTree> {
         self.indexes.layers.get(&layer)?;
-        let mut entries = Vec::new();
-        for (row, id) in ids.iter().enumerate() {
+        let mut entries = Vec::with_capacity(segment.points.len());
+        for (row, w) in segment.point_offsets.windows(2).enumerate() {
             entries.extend(
-                self.nodes[&NodeId(*id)]
-                    .points
+                segment.points[w[0] as usize..w[1] as usize]
                     .iter()
                     .map(|p| (row as u32, *p)),
             );
@@ -345,20 +340,24 @@ impl SceneGraph {
         roots.sort_unstable();
         roots
             .into_iter()
-            .map(|root| {
-                let mut members = self.indexed_members(root);
-                members.sort_unstable_by_key(|m| m.0);
-                let mut entries = Vec::new();
-                for (i, (_, points)) in members.iter().enumerate() {
-                    entries.extend(points.iter().map(|p| (i as u32, *p)));
-                }
-                NodeIndexSegment {
-                    root: root.0,
-                    ids: members.iter().map(|m| m.0.0).collect(),
-                    tree: build_tree(&entries),
-                }
-            })
+            .map(|root| self.archived_node_index(root))
             .collect()
+    }
+
+    /// The node index rooted at `root` for a snapshot (`root` must have one): items are
+    /// positions in its sorted id table.
+    pub(crate) fn archived_node_index(&self, root: NodeId) -> NodeIndexSegment {
+        let mut members = self.indexed_members(root);
+        members.sort_unstable_by_key(|m| m.0);
+        let mut entries = Vec::new();
+        for (i, (_, points)) in members.iter().enumerate() {
+            entries.extend(points.iter().map(|p| (i as u32, *p)));
+        }
+        NodeIndexSegment {
+            root: root.0,
+            ids: members.iter().map(|m| m.0.0).collect(),
+            tree: build_tree(&entries),
+        }
     }
 
     /// Checks the invariants in the module docs: every live index holds exactly the

@@ -1,0 +1,425 @@
+//! Incremental layer segments for a publishing writer.
+//!
+//! [`SceneGraph::cached_layer_segment`] keeps the columns it last built for a layer,
+//! and every mutation records what it changed in that layer (`Layer::touch`). When the
+//! rows kept their places since — no node removed, new nodes only with ids above every
+//! existing one, no index enabled or disabled — the next build looks up only the
+//! changed nodes: when each changed row keeps the length of every column (a node moved,
+//! a value changed) it is overwritten in place and new rows are appended; otherwise
+//! fresh columns are built, copying each run of unchanged rows from the previous ones in
+//! one go. Label and key postings are rebuilt only when labels or keys changed or rows
+//! were added. The layer index is rebuilt only when
+//! points changed, a node index only when its sub-tree did. Otherwise, or when the list
+//! of changes grew longer than the layer, it builds from scratch like
+//! [`SceneGraph::layer_segment`].
+//!
+//! Either way the segment holds the same rows as a fresh one; only the order of its
+//! string table may differ, and strings no longer used stay until the next full build
+//! (one is forced once the table doubled). `store/tests/segment_cache.rs` checks this
+//! against fresh builds under random mutations.
+
+use crate::graph::{Change, SceneGraph};
+use crate::snapshot::{LayerSegment, Manifest, StringTable};
+use crate::{LayerId, NodeId};
+use std::ops::Range;
+
+/// A layer's cached segment and the changes since it was built (empty until
+/// [`SceneGraph::cached_layer_segment`] first builds it).
+#[derive(Default)]
+pub(crate) struct CachedSegment(Option<Box<Cache>>);
+
+/// A clone of a graph starts without caches: they are a publishing writer's working
+/// memory, rebuilt on first use.
+impl Clone for CachedSegment {
+    fn clone(&self) -> Self {
+        CachedSegment(None)
+    }
+}
+
+impl std::fmt::Debug for CachedSegment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.0 {
+            Some(c) => write!(f, "CachedSegment(generation {})", c.generation),
+            None => f.write_str("CachedSegment(none)"),
+        }
+    }
+}
+
+struct Cache {
+    segment: LayerSegment,
+    strings: StringTable,
+    /// The layer generation the segment was built at.
+    generation: u64,
+    /// Length of the string table after the last full build.
+    strings_at_full_build: usize,
+    changes: Changes,
+}
+
+/// What changed in a layer since its segment was cached.
+#[derive(Default)]
+struct Changes {
+    /// Rebuild from scratch.
+    all: bool,
+    /// Some node's points changed (the layer index must be rebuilt).
+    geometry: bool,
+    /// Nodes whose rows changed, or new nodes (may repeat).
+    nodes: Vec<NodeId>,
+    /// Roots of node indexes in this layer whose sub-tree changed (may repeat).
+    index_roots: Vec<NodeId>,
+}
+
+impl CachedSegment {
+    /// Notes `change` (nothing to note without a cached segment). `layer_nodes` bounds
+    /// the list: past it a full rebuild is as cheap.
+    pub(crate) fn record(&mut self, change: Change, layer_nodes: usize) {
+        let Some(cache) = &mut self.0 else { return };
+        let c = &mut cache.changes;
+        if c.all {
+            return;
+        }
+        let (list, id) = match change {
+            Change::All => {
+                *c = Changes {
+                    all: true,
+                    ..Changes::default()
+                };
+                return;
+            }
+            Change::Node(id) => (&mut c.nodes, id),
+            Change::Geometry(id) => {
+                c.geometry = true;
+                (&mut c.nodes, id)
+            }
+            Change::IndexRoot(id) => (&mut c.index_roots, id),
+        };
+        if list.last() != Some(&id) {
+            list.push(id);
+        }
+        if c.nodes.len() + c.index_roots.len() > layer_nodes.max(64) {
+            *c = Changes {
+                all: true,
+                ..Changes::default()
+            };
+        }
+    }
+
+    /// The cached segment, if it is the one of layer generation `generation`.
+    pub(crate) fn at_generation(&self, generation: u64) -> Option<&LayerSegment> {
+        self.0
+            .as_ref()
+            .filter(|c| c.generation == generation)
+            .map(|c| &c.segment)
+    }
+}
+
+/// The manifest a writer last published and the graph generations it was built at.
+#[derive(Default)]
+pub(crate) struct CachedManifest(Option<(u64, u64, Manifest)>);
+
+/// Like [`CachedSegment`], a clone starts without it.
+impl Clone for CachedManifest {
+    fn clone(&self) -> Self {
+        CachedManifest(None)
+    }
+}
+
+impl std::fmt::Debug for CachedManifest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "CachedManifest(some)"
+        } else {
+            "CachedManifest(none)"
+        })
+    }
+}
+
+impl SceneGraph {
+    /// The manifest [`SceneGraph::manifest`] builds, stamped `published_unix_ns`, kept
+    /// for next time: while no layer, layer edge or graph-level label/key entry was
+    /// added or removed, only the per-layer generations, node counts and id bounds are
+    /// brought up to date. This is what a publishing writer calls.
+    pub fn cached_manifest(&mut self, generation: u64, published_unix_ns: u64) -> &Manifest {
+        let key = (self.structure_generation, self.terms_generation);
+        let mut manifest = match self.manifest_cache.0.take() {
+            Some((s, t, mut m)) if (s, t) == key => {
+                for (entry, l) in m.layers.iter_mut().zip(self.layers.values()) {
+                    entry.generation = l.generation;
+                    entry.node_count = l.nodes.len() as u64;
+                    (entry.min_id, entry.max_id) = l.id_bounds();
+                }
+                m.generation = generation;
+                m
+            }
+            _ => self.manifest(generation),
+        };
+        manifest.published_unix_ns = published_unix_ns;
+        &self.manifest_cache.0.insert((key.0, key.1, manifest)).2
+    }
+
+    /// The segment of `layer`, equal in content to [`SceneGraph::layer_segment`], built
+    /// incrementally from the one this method built last time (see the module docs of
+    /// `segment_cache`): after a small change to a large layer only the changed rows are
+    /// rebuilt. The columns stay allocated with the layer: about the layer's archived
+    /// size, once per layer built this way. This is what a publishing writer calls.
+    ///
+    /// # Panics
+    /// If `layer` does not exist.
+    pub fn cached_layer_segment(&mut self, layer: LayerId) -> &LayerSegment {
+        let l = self.layers.get_mut(&layer).expect("layer exists");
+        let generation = l.generation;
+        let cache = match l.cache.0.take() {
+            Some(c) if c.generation == generation => c,
+            Some(c) => self.patched(layer, *c).unwrap_or_else(|| self.full(layer)),
+            None => self.full(layer),
+        };
+        let l = self.layers.get_mut(&layer).expect("layer exists");
+        &l.cache.0.insert(cache).segment
+    }
+
+    fn full(&self, layer: LayerId) -> Box<Cache> {
+        let (segment, strings) = self.build_layer_segment(layer);
+        Box::new(Cache {
+            generation: segment.generation,
+            strings_at_full_build: segment.strings.len(),
+            segment,
+            strings,
+            changes: Changes::default(),
+        })
+    }
+
+    /// The cached segment brought up to date row by row, or `None` when rows moved (a
+    /// full build is needed).
+    fn patched(&self, layer: LayerId, cache: Cache) -> Option<Box<Cache>> {
+        let Cache {
+            segment: mut old,
+            strings: mut table,
+            strings_at_full_build,
+            changes,
+            ..
+        } = cache;
+        if changes.all || old.strings.len() > 2 * strings_at_full_build + 64 {
+            return None;
+        }
+        let l = &self.layers[&layer];
+        let mut changed: Vec<NodeId> = changes.nodes;
+        changed.sort_unstable();
+        changed.dedup();
+        let old_rows = old.ids.len();
+        let mut dirty_rows = Vec::with_capacity(changed.len());
+        let mut appended = Vec::new();
+        for id in changed {
+            if self.nodes.get(&id).is_none_or(|n| n.layer != layer) {
+                return None;
+            }
+            match old.ids.binary_search(&id.0) {
+                Ok(row) => dirty_rows.push(row),
+                Err(at) if at == old_rows => appended.push(id.0),
+                Err(_) => return None,
+            }
+        }
+        if old_rows + appended.len() != l.nodes.len() {
+            return None;
+        }
+        let mut ids = Vec::with_capacity(l.nodes.len());
+        ids.extend_from_slice(&old.ids);
+        ids.extend_from_slice(&appended);
+
+        let mut s = match self.rows_in_place(&mut old, &mut table, &dirty_rows, &ids) {
+            Some(terms_changed) => {
+                for (row, &id) in ids.iter().enumerate().skip(old_rows) {
+                    self.push_row(
+                        &mut old,
+                        &mut table,
+                        &self.nodes[&NodeId(id)],
+                        row as u32,
+                        &ids,
+                    );
+                }
+                old.ids = ids;
+                old.generation = l.generation;
+                if terms_changed || old_rows < old.ids.len() {
+                    old.rebuild_postings();
+                }
+                old
+            }
+            None => {
+                let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
+                s.strings = std::mem::take(&mut old.strings);
+                let mut aabb_cursor = 0;
+                let mut clean_from = 0;
+                for row in dirty_rows.into_iter().chain(old_rows..ids.len()) {
+                    copy_rows(
+                        &old,
+                        &mut s,
+                        clean_from..row.min(old_rows),
+                        &mut aabb_cursor,
+                    );
+                    let node = &self.nodes[&NodeId(ids[row])];
+                    self.push_row(&mut s, &mut table, node, row as u32, &ids);
+                    clean_from = row + 1;
+                }
+                copy_rows(&old, &mut s, clean_from..old_rows, &mut aabb_cursor);
+                s.ids = ids;
+                s.rebuild_postings();
+                s.layer_index = old.layer_index.take();
+                s.node_indexes = std::mem::take(&mut old.node_indexes);
+                s
+            }
+        };
+
+        if changes.geometry {
+            s.layer_index = self.archived_layer_index(layer, &s);
+        }
+        let mut roots = changes.index_roots;
+        roots.sort_unstable();
+        roots.dedup();
+        for index in &mut s.node_indexes {
+            if roots.binary_search(&NodeId(index.root)).is_ok() {
+                *index = self.archived_node_index(NodeId(index.root));
+            }
+        }
+        Some(Box::new(Cache {
+            generation: s.generation,
+            segment: s,
+            strings: table,
+            strings_at_full_build,
+            changes: Changes::default(),
+        }))
+    }
+
+    /// Rewrites the changed rows `dirty_rows` of `seg` in place when each keeps the
+    /// length of every column (a node moved, a feature value changed): returns whether a
+    /// row's labels or feature keys changed (the postings must be rebuilt), or `None`,
+    /// changing nothing, when some row's length changed. `ids` are the new sorted ids.
+    fn rows_in_place(
+        &self,
+        seg: &mut LayerSegment,
+        table: &mut StringTable,
+        dirty_rows: &[usize],
+        ids: &[u64],
+    ) -> Option<bool> {
+        let mut fresh = Vec::with_capacity(dirty_rows.len());
+        for &row in dirty_rows {
+            let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
+            // New strings go to the segment's own table.
+            one.strings = std::mem::take(&mut seg.strings);
+            self.push_row(
+                &mut one,
+                table,
+                &self.nodes[&NodeId(ids[row])],
+                row as u32,
+                ids,
+            );
+            seg.strings = std::mem::take(&mut one.strings);
+            let same_shape = [
+                (&seg.point_offsets, &one.point_offsets),
+                (&seg.child_offsets, &one.child_offsets),
+                (&seg.out_offsets, &one.out_offsets),
+                (&seg.in_offsets, &one.in_offsets),
+                (&seg.label_offsets, &one.label_offsets),
+                (&seg.feature_offsets, &one.feature_offsets),
+            ]
+            .iter()
+            .all(|(old, new)| old[row + 1] - old[row] == new[1]);
+            if !same_shape {
+                return None;
+            }
+            fresh.push(one);
+        }
+        let mut terms_changed = false;
+        for (&row, one) in dirty_rows.iter().zip(&fresh) {
+            let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
+            let r = at(&seg.label_offsets);
+            terms_changed |= seg.labels[r.clone()] != one.labels[..];
+            seg.labels[r].copy_from_slice(&one.labels);
+            let r = at(&seg.feature_offsets);
+            terms_changed |= seg.feature_keys[r.clone()] != one.feature_keys[..];
+            seg.feature_keys[r.clone()].copy_from_slice(&one.feature_keys);
+            seg.feature_kinds[r.clone()].copy_from_slice(&one.feature_kinds);
+            seg.feature_bits[r].copy_from_slice(&one.feature_bits);
+            let r = at(&seg.point_offsets);
+            seg.points[r].copy_from_slice(&one.points);
+            let r = at(&seg.child_offsets);
+            seg.children[r].copy_from_slice(&one.children);
+            let r = at(&seg.out_offsets);
+            seg.out_targets[r.clone()].copy_from_slice(&one.out_targets);
+            seg.out_descriptions[r].copy_from_slice(&one.out_descriptions);
+            let r = at(&seg.in_offsets);
+            seg.in_sources[r.clone()].copy_from_slice(&one.in_sources);
+            seg.in_descriptions[r].copy_from_slice(&one.in_descriptions);
+            seg.parents[row] = one.parents[0];
+            match (
+                seg.aabb_rows.binary_search(&(row as u32)),
+                one.aabbs.first(),
+            ) {
+                (Ok(i), Some(b)) => seg.aabbs[i] = *b,
+                (Ok(i), None) => {
+                    seg.aabb_rows.remove(i);
+                    seg.aabbs.remove(i);
+                }
+                (Err(i), Some(b)) => {
+                    seg.aabb_rows.insert(i, row as u32);
+                    seg.aabbs.insert(i, *b);
+                }
+                (Err(_), None) => {}
+            }
+        }
+        Some(terms_changed)
+    }
+}
+
+/// Appends rows `rows` of `old` to `new` unchanged (they keep their row numbers, so
+/// edge rows stay valid), advancing `aabb_cursor` through `old`'s sparse boxes.
+fn copy_rows(
+    old: &LayerSegment,
+    new: &mut LayerSegment,
+    rows: Range<usize>,
+    aabb_cursor: &mut usize,
+) {
+    let (a, b) = (rows.start, rows.end);
+    if a < b {
+        let r = copy_offsets(&mut new.point_offsets, &old.point_offsets, a, b);
+        new.points.extend_from_slice(&old.points[r]);
+        let r = copy_offsets(&mut new.child_offsets, &old.child_offsets, a, b);
+        new.children.extend_from_slice(&old.children[r]);
+        let r = copy_offsets(&mut new.out_offsets, &old.out_offsets, a, b);
+        new.out_targets
+            .extend_from_slice(&old.out_targets[r.clone()]);
+        new.out_descriptions
+            .extend_from_slice(&old.out_descriptions[r]);
+        let r = copy_offsets(&mut new.in_offsets, &old.in_offsets, a, b);
+        new.in_sources.extend_from_slice(&old.in_sources[r.clone()]);
+        new.in_descriptions
+            .extend_from_slice(&old.in_descriptions[r]);
+        let r = copy_offsets(&mut new.label_offsets, &old.label_offsets, a, b);
+        new.labels.extend_from_slice(&old.labels[r]);
+        let r = copy_offsets(&mut new.feature_offsets, &old.feature_offsets, a, b);
+        new.feature_keys
+            .extend_from_slice(&old.feature_keys[r.clone()]);
+        new.feature_kinds
+            .extend_from_slice(&old.feature_kinds[r.clone()]);
+        new.feature_bits.extend_from_slice(&old.feature_bits[r]);
+        new.parents.extend_from_slice(&old.parents[a..b]);
+    }
+    // Boxes of rows before `b`: those in `a..b` are copied, the rest (rebuilt rows) are
+    // skipped.
+    while let Some(&row) = old.aabb_rows.get(*aabb_cursor) {
+        if row as usize >= b {
+            break;
+        }
+        if row as usize >= a {
+            new.aabb_rows.push(row);
+            new.aabbs.push(old.aabbs[*aabb_cursor]);
+        }
+        *aabb_cursor += 1;
+    }
+}
+
+/// Appends `old`'s offsets of rows `a..b`, shifted to continue `new`; returns the range
+/// of those rows' entries in `old`'s value columns.
+fn copy_offsets(new: &mut Vec<u32>, old: &[u32], a: usize, b: usize) -> Range<usize> {
+    let base = *new.last().expect("offset columns start with 0");
+    let start = old[a];
+    new.extend(old[a + 1..=b].iter().map(|&o| o - start + base));
+    start as usize..old[b] as usize
+}
