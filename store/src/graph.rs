@@ -86,7 +86,7 @@ impl Layer {
 /// What a mutation changed in a layer, for the incremental segment builder.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Change {
-    /// Anything: rows may have shifted (a node removed, an index enabled or disabled).
+    /// Anything: rows may have shifted (an index enabled or disabled).
     All,
     /// This node's row (edges, nesting, labels, features, box; or a new node).
     Node(NodeId),
@@ -94,6 +94,13 @@ pub(crate) enum Change {
     Geometry(NodeId),
     /// The node index rooted at this node.
     IndexRoot(NodeId),
+    /// This node was removed (whether it had points: the layer index changes then).
+    Removed {
+        /// The node.
+        id: NodeId,
+        /// Whether it had points.
+        had_points: bool,
+    },
 }
 
 /// A layered 3D scene graph that can be edited: the writer's live graph.
@@ -398,7 +405,10 @@ impl SceneGraph {
         if let Some(&moved) = layer.nodes.get(node.slot as usize) {
             self.nodes.get_mut(&moved).expect("listed").slot = node.slot;
         }
-        layer.touch(Change::All);
+        layer.touch(Change::Removed {
+            id,
+            had_points: !node.points.is_empty(),
+        });
         self.index_node_removed(&node);
         Ok(())
     }

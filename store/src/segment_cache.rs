@@ -2,8 +2,9 @@
 //!
 //! [`SceneGraph::cached_layer_segment`] keeps the columns it last built for a layer,
 //! and every mutation records what it changed in that layer (`Layer::touch`). When the
-//! rows kept their places since — no node removed, new nodes only with ids above every
-//! existing one, no index enabled or disabled — the next build looks up only the
+//! rows kept their places since — nodes removed only from the end (the largest ids),
+//! new nodes only with ids above every remaining one, no index enabled or disabled —
+//! the next build looks up only the
 //! changed nodes: when each changed row keeps the length of every column (a node moved,
 //! a value changed) it is overwritten in place and new rows are appended; otherwise
 //! fresh columns are built, copying each run of unchanged rows from the previous ones in
@@ -66,6 +67,8 @@ struct Changes {
     nodes: Vec<NodeId>,
     /// Roots of node indexes in this layer whose sub-tree changed (may repeat).
     index_roots: Vec<NodeId>,
+    /// Nodes removed from the layer.
+    removed: Vec<NodeId>,
 }
 
 impl CachedSegment {
@@ -91,11 +94,15 @@ impl CachedSegment {
                 (&mut c.nodes, id)
             }
             Change::IndexRoot(id) => (&mut c.index_roots, id),
+            Change::Removed { id, had_points } => {
+                c.geometry |= had_points;
+                (&mut c.removed, id)
+            }
         };
         if list.last() != Some(&id) {
             list.push(id);
         }
-        if c.nodes.len() + c.index_roots.len() > layer_nodes.max(64) {
+        if c.nodes.len() + c.index_roots.len() + c.removed.len() > layer_nodes.max(64) {
             *c = Changes {
                 all: true,
                 ..Changes::default()
@@ -204,6 +211,20 @@ impl SceneGraph {
         let mut changed: Vec<NodeId> = changes.nodes;
         changed.sort_unstable();
         changed.dedup();
+        let mut removed = changes.removed;
+        removed.sort_unstable();
+        removed.dedup();
+        if !removed.is_empty() {
+            // Only the last rows, gone for good, keep the other rows in place.
+            let kept = old.ids.len().checked_sub(removed.len())?;
+            if !old.ids[kept..].iter().eq(removed.iter().map(|id| &id.0))
+                || removed.iter().any(|id| self.nodes.contains_key(id))
+            {
+                return None;
+            }
+            old.truncate_rows(kept);
+            changed.retain(|id| removed.binary_search(id).is_err());
+        }
         let old_rows = old.ids.len();
         let mut dirty_rows = Vec::with_capacity(changed.len());
         let mut appended = Vec::new();
@@ -237,7 +258,7 @@ impl SceneGraph {
                 }
                 old.ids = ids;
                 old.generation = l.generation;
-                if terms_changed || old_rows < old.ids.len() {
+                if terms_changed || old_rows < old.ids.len() || !removed.is_empty() {
                     old.rebuild_postings();
                 }
                 old
@@ -273,6 +294,8 @@ impl SceneGraph {
         let mut roots = changes.index_roots;
         roots.sort_unstable();
         roots.dedup();
+        s.node_indexes
+            .retain(|index| removed.binary_search(&NodeId(index.root)).is_err());
         for index in &mut s.node_indexes {
             if roots.binary_search(&NodeId(index.root)).is_ok() {
                 *index = self.archived_node_index(NodeId(index.root));
@@ -365,6 +388,33 @@ impl SceneGraph {
             }
         }
         Some(terms_changed)
+    }
+}
+
+impl LayerSegment {
+    /// Drops every row from `rows` on (not the postings or the spatial indexes).
+    fn truncate_rows(&mut self, rows: usize) {
+        fn cut<T>(offsets: &mut Vec<u32>, rows: usize, values: &mut Vec<T>) -> usize {
+            let end = offsets[rows] as usize;
+            offsets.truncate(rows + 1);
+            values.truncate(end);
+            end
+        }
+        cut(&mut self.point_offsets, rows, &mut self.points);
+        cut(&mut self.child_offsets, rows, &mut self.children);
+        let end = cut(&mut self.out_offsets, rows, &mut self.out_targets);
+        self.out_descriptions.truncate(end);
+        let end = cut(&mut self.in_offsets, rows, &mut self.in_sources);
+        self.in_descriptions.truncate(end);
+        cut(&mut self.label_offsets, rows, &mut self.labels);
+        let end = cut(&mut self.feature_offsets, rows, &mut self.feature_keys);
+        self.feature_kinds.truncate(end);
+        self.feature_bits.truncate(end);
+        self.parents.truncate(rows);
+        self.ids.truncate(rows);
+        let boxes = self.aabb_rows.partition_point(|&r| (r as usize) < rows);
+        self.aabb_rows.truncate(boxes);
+        self.aabbs.truncate(boxes);
     }
 }
 
