@@ -48,7 +48,8 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let deadline = start + Duration::from_secs_f64(args.seconds.max(0.0));
     let (mut query_ns, mut visible_ns, mut staleness) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut checked, mut matched, mut batches, mut snapshots) = (0u64, 0u64, 0u64, 0u64);
+    let (mut batches, mut snapshots) = (0u64, 0u64);
+    let (checks, checker) = Checker::spawn();
     let mut current: Option<SceneSnapshot> = None;
     let mut last_progress = start;
     let mut writer_gone = false;
@@ -91,22 +92,20 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
         let answers = answer(args.role, &view, batches);
         query_ns.push(t.elapsed().as_nanos() as f64 / answers.len().max(1) as f64);
         if check {
-            for (q, got) in &answers {
-                checked += 1;
-                if brute_force(&view, q) == *got {
-                    matched += 1;
-                }
-            }
+            // Sampled: a batch the checker has no room for is not checked.
+            let _ = checks.try_send((snap.clone(), answers));
         }
         if last_progress.elapsed() >= Duration::from_millis(500) {
             last_progress = Instant::now();
             println!(
                 "{}",
                 serde_json::json!({"event": "progress", "queries": query_ns.len(), "generation": snap.generation(),
-                    "seconds": start.elapsed().as_secs_f64(), "checked": checked, "matched": matched})
+                    "seconds": start.elapsed().as_secs_f64(), "checked": checker.checked(), "matched": checker.matched()})
             );
         }
     }
+    drop(checks);
+    let (checked, matched) = checker.finish()?;
     let q = percentiles(&mut query_ns);
     let v = percentiles(&mut visible_ns);
     let stale_mean = if staleness.is_empty() {
@@ -125,6 +124,63 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
             "writer_gone": writer_gone})
     );
     Ok(())
+}
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Sampled answers, with the snapshot they were given on, for the brute-force checker.
+type CheckRequest = (SceneSnapshot, Vec<(Query, Vec<u64>)>);
+
+/// The brute-force checker: a thread at the lowest CPU priority (so that checking, which
+/// scans whole layers, does not delay noticing the next snapshot) that re-answers each
+/// sampled batch by brute force on the same snapshot.
+struct Checker {
+    /// Answers checked and answers that matched, so far.
+    counts: Arc<[AtomicU64; 2]>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Checker {
+    /// Starts the thread; it ends when the returned sender is dropped.
+    fn spawn() -> (std::sync::mpsc::SyncSender<CheckRequest>, Checker) {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<CheckRequest>(1);
+        let counts = Arc::new([AtomicU64::new(0), AtomicU64::new(0)]);
+        let shared = Arc::clone(&counts);
+        let thread = std::thread::spawn(move || {
+            // Best effort: at normal priority the checks only cost latency.
+            let _ = rustix::process::setpriority_process(Some(rustix::thread::gettid()), 19);
+            for (snapshot, answers) in rx {
+                let view = snapshot.view();
+                for (q, got) in &answers {
+                    let same = brute_force(&view, q) == *got;
+                    shared[1].fetch_add(u64::from(same), Ordering::Relaxed);
+                    shared[0].fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        });
+        (tx, Checker { counts, thread })
+    }
+
+    fn checked(&self) -> u64 {
+        self.counts[0].load(Ordering::Relaxed)
+    }
+
+    fn matched(&self) -> u64 {
+        self.counts[1].load(Ordering::Relaxed)
+    }
+
+    /// Waits for the last check (drop the sender first): (checked, matched).
+    fn finish(self) -> Result<(u64, u64), Box<dyn std::error::Error>> {
+        let Checker { counts, thread } = self;
+        thread
+            .join()
+            .map_err(|_| "the brute-force checker panicked")?;
+        Ok((
+            counts[0].load(Ordering::Relaxed),
+            counts[1].load(Ordering::Relaxed),
+        ))
+    }
 }
 
 fn ygg_store_unix_ns() -> u64 {

@@ -310,10 +310,13 @@ impl SceneGraph {
         }))
     }
 
-    /// Rewrites the changed rows `dirty_rows` of `seg` in place when each keeps the
-    /// length of every column (a node moved, a feature value changed): returns whether a
-    /// row's labels or feature keys changed (the postings must be rebuilt), or `None`,
-    /// changing nothing, when some row's length changed. `ids` are the new sorted ids.
+    /// Rewrites the changed rows `dirty_rows` of `seg` in place: those that keep the
+    /// length of every column (a node moved, a value changed) are overwritten; from the
+    /// first one that does not (an edge or child added), the rows are cut and pushed
+    /// again — if that tail is short (appending nodes changes the last rows: an odometry
+    /// edge to the previous pose). Returns whether the postings must be rebuilt, or
+    /// `None`, changing nothing, when the tail would be long. `ids` are the new sorted
+    /// ids.
     fn rows_in_place(
         &self,
         seg: &mut LayerSegment,
@@ -322,6 +325,7 @@ impl SceneGraph {
         ids: &[u64],
     ) -> Option<bool> {
         let mut fresh = Vec::with_capacity(dirty_rows.len());
+        let mut cut_at = None;
         for &row in dirty_rows {
             let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
             // New strings go to the segment's own table.
@@ -345,11 +349,17 @@ impl SceneGraph {
             .iter()
             .all(|(old, new)| old[row + 1] - old[row] == new[1]);
             if !same_shape {
-                return None;
+                // Dirty rows are ascending: this one and all after it are pushed again.
+                let rows = seg.ids.len();
+                if rows - row > rows / 8 {
+                    return None;
+                }
+                cut_at = Some(row);
+                break;
             }
             fresh.push(one);
         }
-        let mut terms_changed = false;
+        let mut terms_changed = cut_at.is_some();
         for (&row, one) in dirty_rows.iter().zip(&fresh) {
             let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
             let r = at(&seg.label_offsets);
@@ -386,6 +396,14 @@ impl SceneGraph {
                 }
                 (Err(_), None) => {}
             }
+        }
+        if let Some(cut) = cut_at {
+            let rows = seg.ids.len();
+            seg.truncate_rows(cut);
+            for (row, &id) in ids.iter().enumerate().take(rows).skip(cut) {
+                self.push_row(seg, table, &self.nodes[&NodeId(id)], row as u32, ids);
+            }
+            seg.ids.extend_from_slice(&ids[cut..rows]);
         }
         Some(terms_changed)
     }
