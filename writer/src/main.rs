@@ -1,7 +1,8 @@
 //! `ygg-writer`: command-line front end of the writer.
 //!
-//! `serve-test` is a temporary driver that publishes synthetic segments; the real `serve`
-//! (publishing a scene graph) replaces it once the store lands.
+//! `serve` publishes a scene graph (a `.ygg` file or the built-in office, optionally with
+//! a SLAM-like update stream); `import` converts Spark-DSG JSON; `serve-test` publishes
+//! synthetic segments of chosen sizes, the driver of the transport tests in `tests/`.
 
 mod import;
 
