@@ -979,17 +979,16 @@ fn case_throughput(ctx: &mut Ctx) -> Res<Vec<Row>> {
     })
 }
 
-/// What profiling (perf, in-process timings) found while the benchmark was written; the
-/// run's own numbers above show the same split (writer `publish()` call against manifest
-/// stamp → visible).
+/// What profiling (perf, in-process timings) found while the benchmark was written and
+/// the writer was tuned; the run's own numbers above show the same split (writer
+/// `publish()` call against the part after it returned).
 fn findings() -> Vec<String> {
     [
-        "Writer, single-layer update: `SceneGraph::layer_segment` (ygg-store) builds owned columns before archiving. For AGENTS (705 nodes, 60 KB) that took ~140–170 µs back to back in-process (~200–240 ns per node: SipHash look-ups per node and per string, a binary search per edge) but ~480 µs after a 4 ms pause — whether the pause was slept or spun, so it is cold caches on this shared VM, not idle states — and the manifest (built from every layer) adds ~20 µs. Between sporadic publishes the writer alone uses up the 200 µs budget (`publish_call_us` of `layer_update_office`).",
-        "Writer, full office in mint: `publish()` rebuilds every kd-tree the snapshot carries (a layer index per room's claimed mesh, a node index per object); that is most of the full-office time. The same office in chocolate layout (no indexes) is published and visible in a few ms (`full_office_chocolate`). Keeping the archived trees of unchanged indexes, or archiving the live trees, would remove it.",
-        "Writer, segments above 32 MB: the intermediate columns are fresh allocations above glibc's largest mmap threshold, so every publish page-faults them in again; during development a 40 MB segment took ~70 ms per publish by default and ~20 ms with GLIBC_TUNABLES=glibc.malloc.mmap_threshold=4294967295:glibc.malloc.trim_threshold=4294967295. Archiving straight from the live graph into the loaned sample (no intermediate columns) would remove both the copy and the faults.",
-        "Whole 40 MB graph: re-archiving everything costs about as much as serde serializing it, so the shared-memory path wins by the reader side only (stamp → visible under 1 ms against tens of ms of transfer and deserialization). Publishing only changed layers is where it wins big (`shm_40MB_layer_update`).",
-        "Reader, per new snapshot: `ArchivedScene::new` (ygg-store: DAG check with linear scans and a sorted copy of the layer names) runs when the snapshot is accepted and again on every `view()`, ~20 % of the reader's CPU per office update in a perf profile; the rest is the wake-up (iceoryx2 event over a Unix datagram socket), draining one subscriber per layer, and validating the changed layer (~6 µs for AGENTS).",
-        "Host: 2 vCPUs shared with other sessions (load average 4–8 while this was developed). Readers beyond the cores queue behind each other, and p99s collect multi-millisecond scheduling stalls. Longer pauses between publishes make everything slower (cold caches, idle vCPUs): with 0.3 / 3 / 20 ms pauses `readers_8` p99 was 0.47 / 3.8 / 6.3 ms in one development series.",
+        "Writer, single-layer update: segments are built incrementally (`SceneGraph::cached_layer_segment`, ygg-store): only the changed rows are rebuilt, in place when their shape holds (a pose moved: ~1.5 µs warm for AGENTS, against ~120–150 µs for a fresh build of its 705 nodes); the manifest is patched, not rebuilt, while the layer set and label/key sets hold. What remains in `publish()` after a pause of a few ms is cold caches and syscalls: the /dev/shm free-space check (statvfs, before every loan), the loan, archiving into the sample, the send, and the event that wakes readers (~15–25 µs each on this VM).",
+        "Writer, full office in mint: every layer changes (a node added to or removed from each, alternately), but the rows and kd-trees that did not change are kept, so only the new rows are archived; the bytes of the whole office still travel and are validated in the reader. A fresh build of the office (every kd-tree: a layer index per room's claimed mesh, a node index per object) takes ~15 ms.",
+        "Whole 40 MB graph: publishing it is archiving 40 MB into shared memory (about memory-bandwidth bound); the reader validates in well under a millisecond. The socket baseline serializes, copies through the kernel and deserializes the same graph.",
+        "Reader, per new snapshot: the wake-up (iceoryx2 event over a Unix datagram socket), receiving only the layers the new manifest names at a newer generation, validating those (~6 µs for AGENTS) and the manifest; views are built without re-checking the cut.",
+        "Host: 2 vCPUs shared with other sessions. Readers beyond the cores queue behind each other, and p99s collect multi-millisecond scheduling stalls. Longer pauses between publishes make everything slower (cold caches, idle vCPUs): with 0.3 / 3 / 20 ms pauses `readers_8` p99 was 0.47 / 3.8 / 6.3 ms in one development series.",
     ]
     .into_iter()
     .map(str::to_owned)
