@@ -6,6 +6,7 @@ use super::Answer;
 use super::harness::Target;
 use super::workload::Query;
 use rustc_hash::FxHashMap;
+use std::borrow::Cow;
 use ygg_store::layout::{self, Layout};
 use ygg_store::query::{self, ConeView};
 use ygg_store::{LayerId, NodeId, SceneView, Scope};
@@ -59,28 +60,27 @@ pub struct YggTarget<'a, V: SceneView> {
     name: String,
     layout: Layout,
     view: &'a V,
-    scopes: Scopes,
+    scopes: Cow<'a, Scopes>,
 }
 
 impl<'a, V: SceneView> YggTarget<'a, V> {
     /// Wraps a view built with `layout`.
     pub fn new(name: String, layout: Layout, view: &'a V) -> Self {
-        let scopes = Scopes::new(view);
         YggTarget {
             name,
             layout,
             view,
-            scopes,
+            scopes: Cow::Owned(Scopes::new(view)),
         }
     }
 
     /// Wraps a view whose scopes are already known (they change only with the layers).
-    pub fn with_scopes(name: String, layout: Layout, view: &'a V, scopes: Scopes) -> Self {
+    pub fn with_scopes(name: String, layout: Layout, view: &'a V, scopes: &'a Scopes) -> Self {
         YggTarget {
             name,
             layout,
             view,
-            scopes,
+            scopes: Cow::Borrowed(scopes),
         }
     }
 
