@@ -26,6 +26,7 @@
 mod kdtree;
 mod live;
 mod maintain;
+mod overlay;
 
 pub use kdtree::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree};
 pub(crate) use kdtree::{build_tree, check_tree};
@@ -72,12 +73,12 @@ pub trait SpatialIndex {
 /// and [`SceneView::node_index`] return it for a [`crate::SceneGraph`].
 #[derive(Clone, Copy, Debug)]
 pub struct LiveIndex<'a> {
-    tree: &'a LiveKdTree,
+    tree: &'a overlay::OverlaidTree,
     ids: &'a [NodeId],
 }
 
 impl<'a> LiveIndex<'a> {
-    pub(crate) fn new(tree: &'a LiveKdTree, ids: &'a [NodeId]) -> Self {
+    pub(crate) fn new(tree: &'a overlay::OverlaidTree, ids: &'a [NodeId]) -> Self {
         LiveIndex { tree, ids }
     }
 }
