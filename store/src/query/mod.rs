@@ -15,12 +15,14 @@ mod pattern;
 mod spatial;
 mod traverse;
 
+pub(crate) use fov::index_sees;
 #[doc(inline)]
 pub use fov::{ConeView, visible};
 #[doc(inline)]
 pub use pattern::{
     edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,
 };
+pub(crate) use spatial::radius_bound;
 #[doc(inline)]
 pub use spatial::{
     SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes, nodes_within_radius,
