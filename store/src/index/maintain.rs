@@ -2,10 +2,12 @@
 //! mutation calls to keep them exact, and what the snapshot archives.
 //!
 //! # Invariants (checked by [`SceneGraph::check_indexes`])
-//! - A layer index holds exactly one entry `(point, handle(node))` per point of every
-//!   node of its layer.
+//! - A layer index holds exactly one live entry `(point, handle(node))` per point of
+//!   every node of its layer.
 //! - A node index holds exactly one such entry per point of every node in its root's
 //!   sub-tree (the root included).
+//! - Live entries are those of the kd-tree less the dead ones of nodes moved wholesale,
+//!   plus those nodes' points in the overlay (see `OverlaidTree`).
 //! - Handles are dense `u32`s naming nodes: a node's handle is stored in the node
 //!   (`Node::index_handle`) and `ids[handle]` is the node.
 //!

@@ -4,7 +4,7 @@
 //!
 //! | index | type | kept by | items |
 //! |---|---|---|---|
-//! | live | [`LiveIndex`] over a [`LiveKdTree`] | [`crate::SceneGraph`], updated by every mutation | node handles |
+//! | live | [`LiveIndex`] over a [`LiveKdTree`] plus an overlay of nodes moved wholesale | [`crate::SceneGraph`], updated by every mutation | node handles |
 //! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
 //! | reader-built | [`KdIndex`]: kiddo's `ImmutableKdTree`, kept archived | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
 //!
