@@ -9,29 +9,41 @@
 use crate::graph::{Change, Node, SceneGraph};
 use crate::{Aabb, NodeId, Point};
 
-/// Adds points to an enabled box; returns whether the box changed.
-fn add_points(node: &mut Node, points: &[Point]) -> bool {
+/// How many of `points` have coordinate `a` equal (`==`) to `v`.
+fn count_on(points: &[Point], a: usize, v: f32) -> u32 {
+    points.iter().map(|p| u32::from(p[a] == v)).sum()
+}
+
+/// Adds points (with `around`, their box) to an enabled box; returns whether the box
+/// changed. Points strictly inside the box cost nothing beyond `around`; a face is
+/// counted again only when `around` reaches it.
+fn add_points(node: &mut Node, points: &[Point], around: Option<Aabb>) -> bool {
+    let Some(pb) = around else {
+        return false;
+    };
     let before = node.aabb;
-    for p in points {
-        match &mut node.aabb {
-            None => {
-                node.aabb = Some(Aabb::from_point(*p));
-                node.face_counts = [1; 6];
+    let counts = &mut node.face_counts;
+    match &mut node.aabb {
+        None => {
+            node.aabb = Some(pb);
+            for a in 0..3 {
+                counts[a] = count_on(points, a, pb.min[a]);
+                counts[3 + a] = count_on(points, a, pb.max[a]);
             }
-            Some(b) => {
-                for (a, &c) in p.iter().enumerate() {
-                    if c < b.min[a] {
-                        b.min[a] = c;
-                        node.face_counts[a] = 1;
-                    } else if c == b.min[a] {
-                        node.face_counts[a] += 1;
-                    }
-                    if c > b.max[a] {
-                        b.max[a] = c;
-                        node.face_counts[3 + a] = 1;
-                    } else if c == b.max[a] {
-                        node.face_counts[3 + a] += 1;
-                    }
+        }
+        Some(b) => {
+            for a in 0..3 {
+                if pb.min[a] < b.min[a] {
+                    b.min[a] = pb.min[a];
+                    counts[a] = count_on(points, a, b.min[a]);
+                } else if pb.min[a] == b.min[a] {
+                    counts[a] += count_on(points, a, b.min[a]);
+                }
+                if pb.max[a] > b.max[a] {
+                    b.max[a] = pb.max[a];
+                    counts[3 + a] = count_on(points, a, b.max[a]);
+                } else if pb.max[a] == b.max[a] {
+                    counts[3 + a] += count_on(points, a, b.max[a]);
                 }
             }
         }
@@ -39,19 +51,24 @@ fn add_points(node: &mut Node, points: &[Point]) -> bool {
     node.aabb != before
 }
 
-/// Removes points from an enabled box's counts; returns whether a face lost its last
-/// point (the box must then be recomputed).
-fn remove_points(node: &mut Node, points: &[Point]) -> bool {
-    let Some(b) = node.aabb else {
+/// Removes points (with `around`, their box) from an enabled box's counts; returns
+/// whether a face lost its last point (the box must then be recomputed). Only the faces
+/// `around` reaches are counted.
+fn remove_points(node: &mut Node, points: &[Point], around: Option<Aabb>) -> bool {
+    let (Some(b), Some(pb)) = (node.aabb, around) else {
         return false;
     };
     let mut emptied = false;
-    for p in points {
-        for (a, &c) in p.iter().enumerate() {
-            for (face, bound) in [(a, b.min[a]), (3 + a, b.max[a])] {
-                if c == bound {
+    for a in 0..3 {
+        for (face, reaches, bound) in [
+            (a, pb.min[a] <= b.min[a], b.min[a]),
+            (3 + a, pb.max[a] >= b.max[a], b.max[a]),
+        ] {
+            if reaches {
+                let k = count_on(points, a, bound);
+                if k > 0 {
                     let c = &mut node.face_counts[face];
-                    *c = c.saturating_sub(1);
+                    *c = c.saturating_sub(k);
                     emptied |= *c == 0;
                 }
             }
@@ -92,7 +109,7 @@ impl SceneGraph {
         let node = self.nodes.get_mut(&id).expect("exists");
         node.aabb = None;
         node.face_counts = [0; 6];
-        add_points(node, &points);
+        add_points(node, &points, Aabb::from_points(&points));
         let layer = node.layer;
         self.touch_layer(layer, Change::Node(id));
     }
@@ -100,6 +117,7 @@ impl SceneGraph {
     /// Applies a change of sub-tree points (`removed` left, `added` joined) to every
     /// enabled box at or above `from`.
     fn update_boxes(&mut self, from: NodeId, removed: &[Point], added: &[Point]) {
+        let (removed_box, added_box) = (Aabb::from_points(removed), Aabb::from_points(added));
         let mut cur = Some(from);
         while let Some(n) = cur {
             let node = self.nodes.get_mut(&n).expect("exists");
@@ -107,9 +125,9 @@ impl SceneGraph {
             if !node.bbox_enabled {
                 continue;
             }
-            if remove_points(node, removed) {
+            if remove_points(node, removed, removed_box) {
                 self.recompute_box(n);
-            } else if add_points(node, added) {
+            } else if add_points(node, added, added_box) {
                 let layer = node.layer;
                 self.touch_layer(layer, Change::Node(n));
             }

@@ -62,11 +62,31 @@ impl Aabb {
     }
 
     /// The smallest box holding every point, or `None` for no points.
+    ///
+    /// Runs over the coordinates as one flat array in blocks of eight points, each
+    /// coordinate of a block with its own running bound, so the bounds do not wait on
+    /// one another (several times faster than growing one box point by point).
     pub fn from_points(points: &[Point]) -> Option<Self> {
-        let (first, rest) = points.split_first()?;
-        let mut b = Aabb::from_point(*first);
-        for p in rest {
-            b.grow(p);
+        const LANES: usize = 24;
+        let first = *points.first()?;
+        let flat: &[f32] = bytemuck::cast_slice(points);
+        let blocks = flat.chunks_exact(LANES);
+        let rest = blocks.remainder();
+        let mut lo: [f32; LANES] = std::array::from_fn(|i| first[i % 3]);
+        let mut hi = lo;
+        for block in blocks {
+            for i in 0..LANES {
+                lo[i] = lo[i].min(block[i]);
+                hi[i] = hi[i].max(block[i]);
+            }
+        }
+        let mut b = Aabb::from_point(first);
+        for i in 0..LANES {
+            b.min[i % 3] = b.min[i % 3].min(lo[i]);
+            b.max[i % 3] = b.max[i % 3].max(hi[i]);
+        }
+        for p in rest.chunks_exact(3) {
+            b.grow(&[p[0], p[1], p[2]]);
         }
         Some(b)
     }
@@ -127,21 +147,70 @@ impl Aabb {
 /// prefix and suffix (points compared bit for bit). Moving one point of a node, or
 /// appending points to it, then costs index and box updates for those points only.
 pub(crate) fn changed_points<'a>(old: &'a [Point], new: &'a [Point]) -> (&'a [Point], &'a [Point]) {
-    let same = |a: &Point, b: &Point| a.map(f32::to_bits) == b.map(f32::to_bits);
-    let prefix = old.iter().zip(new).take_while(|(a, b)| same(a, b)).count();
-    let (old, new) = (&old[prefix..], &new[prefix..]);
-    let suffix = old
+    let (a, b): (&[[u32; 3]], &[[u32; 3]]) = (bytemuck::cast_slice(old), bytemuck::cast_slice(new));
+    let prefix = prefix_len(a, b);
+    let suffix = suffix_len(&a[prefix..], &b[prefix..]);
+    (
+        &old[prefix..old.len() - suffix],
+        &new[prefix..new.len() - suffix],
+    )
+}
+
+/// Points compared at once by [`prefix_len`] and [`suffix_len`] (a slice comparison of
+/// plain integers, which compiles to a memory compare).
+const SAME_BLOCK: usize = 32;
+
+/// How many leading points of `a` and `b` are equal.
+fn prefix_len(a: &[[u32; 3]], b: &[[u32; 3]]) -> usize {
+    let n = a.len().min(b.len());
+    let mut k = 0;
+    while k + SAME_BLOCK <= n && a[k..k + SAME_BLOCK] == b[k..k + SAME_BLOCK] {
+        k += SAME_BLOCK;
+    }
+    k + a[k..n]
+        .iter()
+        .zip(&b[k..n])
+        .take_while(|(x, y)| x == y)
+        .count()
+}
+
+/// How many trailing points of `a` and `b` are equal.
+fn suffix_len(a: &[[u32; 3]], b: &[[u32; 3]]) -> usize {
+    let n = a.len().min(b.len());
+    let (ea, eb) = (a.len(), b.len());
+    let mut k = 0;
+    while k + SAME_BLOCK <= n && a[ea - k - SAME_BLOCK..ea - k] == b[eb - k - SAME_BLOCK..eb - k] {
+        k += SAME_BLOCK;
+    }
+    k + a[..ea - k]
         .iter()
         .rev()
-        .zip(new.iter().rev())
-        .take_while(|(a, b)| same(a, b))
-        .count();
-    (&old[..old.len() - suffix], &new[..new.len() - suffix])
+        .zip(b[..eb - k].iter().rev())
+        .take_while(|(x, y)| x == y)
+        .count()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_from_points_equals_growing_one_point_at_a_time() {
+        assert_eq!(Aabb::from_points(&[]), None);
+        for n in [1, 2, 7, 8, 9, 16, 23, 100] {
+            let points: Vec<Point> = (0..n)
+                .map(|i| {
+                    let t = i as f32;
+                    [(t * 7.3).sin() * 5.0, (t * 1.7).cos() - t, t * 0.5 - 3.0]
+                })
+                .collect();
+            let mut want = Aabb::from_point(points[0]);
+            for p in &points {
+                want.grow(p);
+            }
+            assert_eq!(Aabb::from_points(&points), Some(want), "{n} points");
+        }
+    }
 
     #[test]
     fn changed_points_trims_common_prefix_and_suffix() {
@@ -156,6 +225,18 @@ mod tests {
         assert!(r.is_empty() && n.is_empty());
         let (r, n) = changed_points(&a, &[]);
         assert_eq!((r.len(), n.len()), (3, 0));
+        // Long lists: one point changed anywhere, compared block by block.
+        let long: Vec<Point> = (0..200).map(|i| [i as f32, 0.0, 1.0]).collect();
+        for at in [0, 31, 32, 33, 100, 167, 168, 199] {
+            let mut moved = long.clone();
+            moved[at][2] = 2.0;
+            assert_eq!(
+                changed_points(&long, &moved),
+                (&long[at..=at], &moved[at..=at])
+            );
+        }
+        assert_eq!(changed_points(&long, &long[..150]).0, &long[150..]);
+        assert_eq!(changed_points(&long[50..], &long).1, &long[..50]);
         // -0.0 and 0.0 differ bit for bit: both are updated.
         let signed = [[-0.0, 0.0, 0.0], a[1], a[2]];
         assert_eq!(changed_points(&a, &signed).0.len(), 1);

@@ -52,6 +52,7 @@
 //! ```
 
 use crate::dsg::{DsgLayer, LayerKey};
+use crate::index::SpatialIndex;
 use crate::layout::object_mesh_layers;
 use crate::query::{self, ConeView, SpatialQueryError};
 use crate::{Aabb, LayerId, NodeId, Point, SceneView, Scope};
@@ -254,6 +255,10 @@ struct Claimant<R> {
     id: NodeId,
     bbox: Option<Aabb>,
     mesh: Vec<R>,
+    /// Whether the object keeps a box and a node index and every node below it is one
+    /// of its mesh nodes: its box then bounds exactly its claimed vertices, and
+    /// [`crate::query::nearest_in_subtree`] searches exactly them.
+    indexed_mesh: bool,
 }
 
 /// Objects with more mesh children than this (saffron's one node per vertex) get no
@@ -307,6 +312,8 @@ pub struct Objects<'a, V: SceneView> {
     parts: OnceLock<Vec<Vec<Aabb>>>,
     /// The ids of `claimants`.
     claimant_ids: FxHashSet<NodeId>,
+    /// With [`Objects::in_subtree`]: every object node kept (with geometry or not).
+    kept: Option<FxHashSet<NodeId>>,
 }
 
 /// Whether `name` names an object layer: `OBJECTS` (vanilla) or
@@ -328,6 +335,39 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// the mesh layers' nodes for a box around each layer (their boxes where the layout
     /// keeps them, their points otherwise).
     pub fn new(view: &'a V) -> Self {
+        Self::build(view, false, |_| true)
+    }
+
+    /// Like [`Objects::new`], restricted to the objects in the sub-tree of `root` (a
+    /// room, say): every query then answers among those objects only.
+    ///
+    /// # Examples
+    /// ```
+    /// # use ygg_store::{dsg, layout::{self, Layout}, objects::Objects, SceneView};
+    /// let office = dsg::office::generate(dsg::office::OfficeParams { seed: 7, scale: 0.02 });
+    /// let graph = layout::build(&office, Layout::Mint).unwrap();
+    /// let everywhere = Objects::new(&graph).objects_within([20.0, 12.0, 1.5], 1000.0).unwrap();
+    /// let room = layout::object_mesh_layers(&graph)[0].1.expect("per-room layout");
+    /// let here = Objects::in_subtree(&graph, room).objects_within([20.0, 12.0, 1.5], 1000.0).unwrap();
+    /// assert!(!here.is_empty() && here.len() < everywhere.len());
+    /// assert!(here.iter().all(|o| everywhere.contains(o)));
+    /// ```
+    pub fn in_subtree(view: &'a V, root: NodeId) -> Self {
+        Self::build(view, true, |n| {
+            let mut cur = view.parent(n);
+            while let Some(p) = cur {
+                if p == root {
+                    return true;
+                }
+                cur = view.node(p).and_then(|x| view.parent(x));
+            }
+            false
+        })
+    }
+
+    /// [`Objects::new`] over the object nodes `keep` accepts; `scoped`: keep only the
+    /// mesh layers holding their geometry.
+    fn build(view: &'a V, scoped: bool, keep: impl Fn(V::NodeRef<'a>) -> bool) -> Self {
         let mut mesh_layers: Vec<LayerId> = object_mesh_layers(view)
             .into_iter()
             .map(|(l, _)| l)
@@ -344,21 +384,44 @@ impl<'a, V: SceneView> Objects<'a, V> {
         object_layers.sort_unstable();
         object_layers.dedup();
         let mut claimants = Vec::new();
+        // The mesh layers holding the kept objects' mesh nodes.
+        let mut used_layers = Vec::new();
+        let mut kept = FxHashSet::default();
         for &layer in &object_layers {
-            for n in view.layer_nodes(layer) {
+            for n in view.layer_nodes(layer).filter(|&n| keep(n)) {
+                if scoped {
+                    kept.insert(view.node_id(n));
+                }
                 // Every mesh child when there are few of them (one per object except in
                 // saffron) or the object keeps no box; else the first, to know it has one.
                 let children = view.children(n);
                 let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
-                let mesh: Vec<V::NodeRef<'a>> = children
-                    .iter()
-                    .filter_map(|&c| view.node(c))
-                    .filter(|&c| mesh_layers.binary_search(&view.node_layer(c)).is_ok())
-                    .take(if all { usize::MAX } else { 1 })
-                    .collect();
+                let mut mesh: Vec<V::NodeRef<'a>> = Vec::new();
+                let mut only_mesh = true;
+                for &c in children {
+                    let Some(c) = view.node(c) else {
+                        only_mesh = false;
+                        continue;
+                    };
+                    let l = view.node_layer(c);
+                    if mesh_layers.binary_search(&l).is_err() {
+                        only_mesh = false;
+                        continue;
+                    }
+                    if all || mesh.is_empty() {
+                        mesh.push(c);
+                    }
+                    if used_layers.last() != Some(&l) {
+                        used_layers.push(l);
+                    }
+                    only_mesh &= view.children(c).is_empty();
+                }
                 if mesh.is_empty() {
                     continue;
                 }
+                let indexed_mesh = only_mesh
+                    && view.aabb(n).is_some()
+                    && view.node_index(view.node_id(n)).is_some();
                 // The object's own box (mint, saffron) holds its whole sub-tree; else the
                 // box around its mesh nodes' points.
                 let bbox = view.aabb(n).or_else(|| {
@@ -370,8 +433,15 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     id: view.node_id(n),
                     bbox,
                     mesh: if all { mesh } else { Vec::new() },
+                    indexed_mesh,
                 });
             }
+        }
+        if scoped {
+            // Only the layers holding the kept objects' geometry.
+            used_layers.sort_unstable();
+            used_layers.dedup();
+            mesh_layers = used_layers;
         }
         claimants.sort_unstable_by_key(|c| c.id);
         claimants.dedup_by_key(|c| c.id);
@@ -392,6 +462,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
             claimants,
             parts: OnceLock::new(),
             claimant_ids,
+            kept: scoped.then_some(kept),
         }
     }
 
@@ -416,10 +487,16 @@ impl<'a, V: SceneView> Objects<'a, V> {
             .object_layers
             .iter()
             .flat_map(|&l| self.view.layer_nodes(l).map(|n| self.view.node_id(n)))
+            .filter(|id| self.is_kept(*id))
             .collect();
         ids.sort_unstable();
         ids.dedup();
         ids
+    }
+
+    /// Whether object `id` is among those queried (always, unless scoped).
+    fn is_kept(&self, id: NodeId) -> bool {
+        self.kept.as_ref().is_none_or(|k| k.contains(&id))
     }
 
     /// The objects that claim at least one mesh vertex, ascending.
@@ -510,8 +587,12 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// [`ObjectQueryError::Spatial`]).
     ///
     /// # Complexity
-    /// One [`crate::query::nodes_within_radius`] per object-mesh layer (a kd-tree range
-    /// search where the layer has an index), then one parent lookup per mesh node found.
+    /// Where every object keeps a box and a node index over exactly its vertices (mint,
+    /// saffron): one box test per object, and for an object whose box straddles the
+    /// ball a kd-tree search of its node index that stops at the first vertex within
+    /// `radius`. Elsewhere: one [`crate::query::nodes_within_radius`] per object-mesh
+    /// layer (a kd-tree range search where the layer has an index), then one parent
+    /// lookup per mesh node found.
     pub fn objects_within(
         &self,
         point: Point,
@@ -522,6 +603,28 @@ impl<'a, V: SceneView> Objects<'a, V> {
             return Err(SpatialQueryError::InvalidRadius(radius).into());
         }
         let mut out = Vec::new();
+        if !self.claimants.is_empty() && self.claimants.iter().all(|c| c.indexed_mesh) {
+            let r2 = query::radius_bound(radius);
+            for c in &self.claimants {
+                let Some(b) = c.bbox else { continue };
+                // The box bounds the object's vertices: entirely beyond the ball, or
+                // entirely inside it (and it holds at least one vertex).
+                if b.distance_squared_to(&point) > r2 {
+                    continue;
+                }
+                let within = farthest_distance2(&b, &point) <= r2
+                    || match self.view.node_index(c.id) {
+                        Some(index) => any_within(&index, &point, r2),
+                        None => query::nearest_in_subtree(self.view, c.id, point, 1)?
+                            .first()
+                            .is_some_and(|&(_, d)| d <= radius),
+                    };
+                if within {
+                    out.push(c.id); // claimants ascend by id
+                }
+            }
+            return Ok(out);
+        }
         for (&layer, b) in self.mesh_layers.iter().zip(&self.layer_boxes) {
             if b.is_none_or(|b| lower_bound(&b, &point) > f64::from(radius)) {
                 continue;
@@ -546,9 +649,11 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// Classifies each object's box, then its up to eight part boxes (computed by the
     /// first call, one pass over the claimed vertices), against the cone with margins far above rounding: a box
     /// clearly outside rules its vertices out, a non-empty box clearly inside answers
-    /// yes. Only an object that neither settles runs [`crate::query::visible`] (a
-    /// kd-tree search over a ball around the cone where the object has a node index, a
-    /// scan of its vertices otherwise).
+    /// yes. Only an object that neither settles is searched: for an object of many mesh
+    /// nodes whose node index holds exactly its vertices (saffron), one radius search of
+    /// that index over a ball around the cone, testing points against the cone until the
+    /// first one inside; otherwise [`crate::query::visible`] from the object (a scan of
+    /// its vertices that stops at the first visible one).
     pub fn visible_objects(
         &self,
         eye: Point,
@@ -603,6 +708,18 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     continue;
                 }
             }
+            // An object of many mesh nodes (no part boxes: saffron's one per vertex) whose
+            // node index holds exactly its vertices: a yes or no from the index, without
+            // a node lookup per vertex found.
+            if c.indexed_mesh
+                && c.mesh.is_empty()
+                && let Some(index) = self.view.node_index(c.id)
+            {
+                if query::index_sees(&index, &cone)? {
+                    out.push(c.id);
+                }
+                continue;
+            }
             let seen = query::visible(self.view, c.id, &cone)?;
             if seen.iter().any(|&m| self.is_mesh_node(m)) {
                 out.push(c.id);
@@ -622,6 +739,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     .nodes_with_label(l, label)
                     .map(|n| self.view.node_id(n))
             })
+            .filter(|id| self.is_kept(*id))
             .collect();
         out.sort_unstable();
         out.dedup();
@@ -808,6 +926,33 @@ impl Reach {
         let gap = radial * self.cos_half - axial * self.sin_half;
         gap <= rho2.sqrt() * (1.0 + 1e-9) + Self::ANGLE_MARGIN * len2.sqrt()
     }
+}
+
+/// An upper bound of [`crate::distance_squared`] from `c` to any point inside `b`: per
+/// axis the farther face, evaluated in the same order (rounding is monotone, so no point
+/// of the box is farther).
+fn farthest_distance2(b: &Aabb, c: &Point) -> f32 {
+    let v = [0, 1, 2].map(|a| {
+        let (lo, hi) = (b.min[a] - c[a], b.max[a] - c[a]);
+        (lo * lo).max(hi * hi)
+    });
+    v[0] + v[1] + v[2]
+}
+
+/// Whether `index` holds a point at squared distance `<= r2` from `c`: a nearest-point
+/// search bounded by `r2` that drops its bound below zero at the first such point, so
+/// that it prunes everything left.
+fn any_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32) -> bool {
+    let mut hit = false;
+    index.nearest_visit(c, |d2, _| {
+        if d2 <= r2 {
+            hit = true;
+            -1.0
+        } else {
+            r2
+        }
+    });
+    hit
 }
 
 /// A lower bound of the distance (as the spatial queries compute it in `f32`) from `c`

@@ -197,12 +197,77 @@ fn check_against_brute_force(d: &DsgGraph, n: usize, seed: u64) {
             assert_eq!(archived[i], want[i], "{layout} archived, query {i}: {q:?}");
         }
     }
+    check_rooms(d, &truth, &queries);
     eprintln!(
         "{}: {n} queries, {non_empty} with non-empty answers",
         d.source
     );
     if d.mesh.is_some() {
         assert!(non_empty > n / 2, "the queries hit too few objects");
+    }
+}
+
+/// Objects scoped to one room ([`Objects::in_subtree`]) answer what brute force answers
+/// over that room's objects, on every per-room layout, live and archived.
+fn check_rooms(d: &DsgGraph, truth: &Truth, queries: &[ObjectQuery]) {
+    let index = d.node_index();
+    let room_of = |id: u64| {
+        let mut cur = d.nodes[index[&id]].parent;
+        while let Some(p) = cur {
+            let n = &d.nodes[index[&p]];
+            if n.kind == NodeKind::Room {
+                return Some(p);
+            }
+            cur = n.parent;
+        }
+        None
+    };
+    let rooms: Vec<u64> = d
+        .nodes
+        .iter()
+        .filter(|n| n.kind == NodeKind::Room)
+        .map(|n| n.id)
+        .collect();
+    for layout in [Layout::Chocolate, Layout::Mint, Layout::Saffron] {
+        let g = layout::build(d, layout).unwrap();
+        let snapshot = g.to_snapshot();
+        let archived = snapshot.view();
+        for &room in &rooms {
+            let live = Objects::in_subtree(&g, NodeId(room));
+            let arch = Objects::in_subtree(&archived, NodeId(room));
+            for (i, q) in queries.iter().enumerate() {
+                let want: Vec<NodeId> = match q {
+                    // The nearest among the room's objects is not the nearest overall.
+                    ObjectQuery::NearestObject { point } => {
+                        let here = Truth {
+                            objects: truth
+                                .objects
+                                .iter()
+                                .filter(|o| room_of(o.0) == Some(room))
+                                .cloned()
+                                .collect(),
+                            labels: Vec::new(),
+                        };
+                        here.answer(&ObjectQuery::NearestObject { point: *point })
+                    }
+                    _ => truth
+                        .answer(q)
+                        .into_iter()
+                        .filter(|o| room_of(o.0) == Some(room))
+                        .collect(),
+                };
+                assert_eq!(
+                    live.answer(q).unwrap(),
+                    want,
+                    "{layout} room {room}, query {i}: {q:?}"
+                );
+                assert_eq!(
+                    arch.answer(q).unwrap(),
+                    want,
+                    "{layout} archived room {room}, query {i}"
+                );
+            }
+        }
     }
 }
 

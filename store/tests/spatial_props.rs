@@ -21,6 +21,11 @@ enum Op {
     SetGeometry(u8, Vec<[i8; 3]>),
     /// The same point several times.
     SetDuplicates(u8, [i8; 3], u8),
+    /// Many points around one (enough to move the node wholesale into an index's
+    /// overlay; see `OverlaidTree`).
+    SetCluster(u8, [i8; 3], u8),
+    /// Every point of the node moved by the same offset (a rigid move).
+    Translate(u8, [i8; 3]),
     Nest(u8, u8),
     Unnest(u8),
     EnableBox(u8),
@@ -47,6 +52,8 @@ fn op() -> impl Strategy<Value = Op> {
         2 => n.clone().prop_map(Op::RemoveNode),
         10 => (n.clone(), prop::collection::vec(point(), 0..5)).prop_map(|(a, p)| Op::SetGeometry(a, p)),
         1 => (n.clone(), point(), 2u8..40).prop_map(|(a, p, k)| Op::SetDuplicates(a, p, k)),
+        2 => (n.clone(), point(), 8u8..60).prop_map(|(a, p, k)| Op::SetCluster(a, p, k)),
+        4 => (n.clone(), [-2i8..3, -2i8..3, -1i8..2]).prop_map(|(a, d)| Op::Translate(a, d)),
         5 => (n.clone(), n.clone()).prop_map(|(a, b)| Op::Nest(a, b)),
         3 => n.clone().prop_map(Op::Unnest),
         1 => n.clone().prop_map(Op::EnableBox),
@@ -101,6 +108,16 @@ fn grid(p: &[i8; 3]) -> Point {
     p.map(|c| f32::from(c) / 2.0)
 }
 
+/// `k` grid points around `p` (a deterministic spiral of offsets; some coincide).
+fn cluster(p: &[i8; 3], k: u8) -> Vec<Point> {
+    (0..k)
+        .map(|i| {
+            let i = i as i8;
+            grid(&[p[0] + i % 4, p[1] + (i / 4) % 4, p[2] + i % 3])
+        })
+        .collect()
+}
+
 fn build(s: &Start) -> SceneGraph {
     let mut g = SceneGraph::new();
     for i in 0..LAYERS {
@@ -138,6 +155,18 @@ fn apply(g: &mut SceneGraph, op: &Op) {
         Op::RemoveNode(n) => g.remove_node(node(*n)),
         Op::SetGeometry(n, pts) => g.set_geometry(node(*n), pts.iter().map(grid).collect()),
         Op::SetDuplicates(n, p, k) => g.set_geometry(node(*n), vec![grid(p); *k as usize]),
+        Op::SetCluster(n, p, k) => g.set_geometry(node(*n), cluster(p, *k)),
+        Op::Translate(n, d) => match g.node(node(*n)) {
+            Some(x) => {
+                let moved = g
+                    .points(x)
+                    .iter()
+                    .map(|q| [0, 1, 2].map(|a| q[a] + f32::from(d[a]) / 2.0))
+                    .collect();
+                g.set_geometry(node(*n), moved)
+            }
+            None => Ok(()),
+        },
         Op::Nest(a, b) => g.nest(node(*a), node(*b)),
         Op::Unnest(n) => g.unnest(node(*n)),
         Op::EnableBox(n) => g.enable_bounding_box(node(*n)),

@@ -37,30 +37,46 @@ pub fn median_p99(samples: &mut [f64]) -> (f64, f64) {
     (at(0.5), at(0.99))
 }
 
-/// Times every query `reps` times on `target`; rows per family.
-pub fn time_target(target: &dyn Target, workload: &Workload, reps: usize) -> Vec<Row> {
-    let mut by_family: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    for q in &workload.queries {
-        let samples = by_family.entry(q.family()).or_default();
-        for _ in 0..reps {
-            let t = Instant::now();
-            let a = target.answer(q);
-            let ns = t.elapsed().as_nanos() as f64;
-            std::hint::black_box(a);
-            samples.push(ns);
+/// Queries per block of [`time_targets`].
+const BLOCK: usize = 64;
+
+/// Times every query `reps` times on every target; rows per target and family, targets
+/// in the order given.
+///
+/// The targets take turns on blocks of [`BLOCK`] consecutive queries (each query
+/// repeated `reps` times in a row, as a caller repeating a query would), so that load
+/// from other processes drifting during the run hits every target alike and the ratios
+/// between targets hold within one run.
+pub fn time_targets(targets: &[&dyn Target], workload: &Workload, reps: usize) -> Vec<Row> {
+    let mut samples: Vec<BTreeMap<String, Vec<f64>>> = vec![BTreeMap::new(); targets.len()];
+    for block in workload.queries.chunks(BLOCK) {
+        for (target, by_family) in targets.iter().zip(&mut samples) {
+            for q in block {
+                let s = by_family.entry(q.family()).or_default();
+                for _ in 0..reps {
+                    let t = Instant::now();
+                    let a = target.answer(q);
+                    let ns = t.elapsed().as_nanos() as f64;
+                    std::hint::black_box(a);
+                    s.push(ns);
+                }
+            }
         }
     }
-    let name = target.name();
-    by_family
-        .into_iter()
-        .map(|(query, mut s)| {
-            let (median_us, p99_us) = median_p99(&mut s);
-            Row {
-                target: name.clone(),
-                query,
-                median_us,
-                p99_us,
-            }
+    targets
+        .iter()
+        .zip(samples)
+        .flat_map(|(target, by_family)| {
+            let name = target.name();
+            by_family.into_iter().map(move |(query, mut s)| {
+                let (median_us, p99_us) = median_p99(&mut s);
+                Row {
+                    target: name.clone(),
+                    query,
+                    median_us,
+                    p99_us,
+                }
+            })
         })
         .collect()
 }

@@ -1,28 +1,25 @@
 //! The Yggdrasil rungs: vanilla (brute force over the ported structure, as the paper
-//! runs it) and chocolate, mint, saffron (the store's spatial API scoped to the room's
-//! claimed-mesh layer; mint and saffron have live indexes, chocolate scans).
+//! runs it) and chocolate, mint, saffron: Q1a is the store's nearest-node query scoped
+//! to the room's claimed-mesh layer; Q1b and Q2 are the object queries of
+//! [`ygg_store::objects`] over the room's objects ([`Objects::in_subtree`]). Mint and
+//! saffron have live indexes and object boxes, chocolate scans.
 
 use super::Answer;
 use super::harness::Target;
 use super::workload::Query;
 use rustc_hash::FxHashMap;
+use std::borrow::Cow;
+use std::cell::OnceCell;
 use ygg_store::layout::{self, Layout};
+use ygg_store::objects::Objects;
 use ygg_store::query::{self, ConeView};
 use ygg_store::{LayerId, NodeId, SceneView, Scope};
-
-/// Where a room's objects live in a per-room layout.
-#[derive(Clone, Copy)]
-pub struct RoomScope {
-    /// The room's claimed-mesh layer.
-    mesh_layer: LayerId,
-    /// The room's "claimed" group node (parent of its objects).
-    claimed: NodeId,
-}
 
 /// The per-room query scopes of a scene, found once from layer names.
 #[derive(Clone, Default)]
 pub struct Scopes {
-    rooms: FxHashMap<u64, RoomScope>,
+    /// Each room's claimed-mesh layer.
+    rooms: FxHashMap<u64, LayerId>,
     mesh_layer: Option<LayerId>,
 }
 
@@ -35,18 +32,7 @@ impl Scopes {
             match room {
                 None => mesh_layer = Some(layer),
                 Some(room) => {
-                    let claimed = view
-                        .layer_by_name(&format!("room:{}", room.0))
-                        .and_then(|l| view.layer_nodes(l).map(|n| view.node_id(n)).min());
-                    if let Some(claimed) = claimed {
-                        rooms.insert(
-                            room.0,
-                            RoomScope {
-                                mesh_layer: layer,
-                                claimed,
-                            },
-                        );
-                    }
+                    rooms.insert(room.0, layer);
                 }
             }
         }
@@ -59,29 +45,45 @@ pub struct YggTarget<'a, V: SceneView> {
     name: String,
     layout: Layout,
     view: &'a V,
-    scopes: Scopes,
+    scopes: Cow<'a, Scopes>,
+    /// The object queries of each room, built on first use.
+    objects: OnceCell<FxHashMap<u64, Objects<'a, V>>>,
 }
 
 impl<'a, V: SceneView> YggTarget<'a, V> {
     /// Wraps a view built with `layout`.
     pub fn new(name: String, layout: Layout, view: &'a V) -> Self {
-        let scopes = Scopes::new(view);
         YggTarget {
             name,
             layout,
             view,
-            scopes,
+            scopes: Cow::Owned(Scopes::new(view)),
+            objects: OnceCell::new(),
         }
     }
 
     /// Wraps a view whose scopes are already known (they change only with the layers).
-    pub fn with_scopes(name: String, layout: Layout, view: &'a V, scopes: Scopes) -> Self {
+    pub fn with_scopes(name: String, layout: Layout, view: &'a V, scopes: &'a Scopes) -> Self {
         YggTarget {
             name,
             layout,
             view,
-            scopes,
+            scopes: Cow::Borrowed(scopes),
+            objects: OnceCell::new(),
         }
+    }
+
+    /// The object queries over `room`'s objects.
+    fn room_objects(&self, room: u64) -> Option<&Objects<'a, V>> {
+        self.objects
+            .get_or_init(|| {
+                self.scopes
+                    .rooms
+                    .keys()
+                    .map(|&r| (r, Objects::in_subtree(self.view, NodeId(r))))
+                    .collect()
+            })
+            .get(&room)
     }
 
     /// The object owning a mesh node (its parent).
@@ -143,46 +145,30 @@ impl<V: SceneView> Target for YggTarget<'_, V> {
                 let Some(s) = scope(room) else {
                     return Vec::new();
                 };
-                let found = query::nearest_nodes(self.view, Scope::Layer(s.mesh_layer), *point, 1)
-                    .unwrap_or_default();
+                let found =
+                    query::nearest_nodes(self.view, Scope::Layer(s), *point, 1).unwrap_or_default();
                 self.owners(found.into_iter().map(|(id, _)| id))
             }
             Query::Within {
                 room,
                 point,
                 radius,
-            } => {
-                let Some(s) = scope(room) else {
-                    return Vec::new();
-                };
-                let found = query::nodes_within_radius(
-                    self.view,
-                    Scope::Layer(s.mesh_layer),
-                    *point,
-                    *radius,
-                )
-                .unwrap_or_default();
-                self.owners(found)
-            }
+            } => self.room_objects(*room).map_or_else(Vec::new, |o| {
+                let found = o.objects_within(*point, *radius).unwrap_or_default();
+                found.into_iter().map(|n| n.0).collect()
+            }),
             Query::Visible {
                 room,
                 eye,
                 dir,
                 half_angle_deg,
                 range,
-            } => {
-                let Some(s) = scope(room) else {
-                    return Vec::new();
-                };
-                let cone = cone_view(eye, dir, *half_angle_deg, *range);
-                let found = query::visible(self.view, s.claimed, &cone).unwrap_or_default();
-                // Mesh nodes map to their objects; objects carry no points of their own.
-                self.owners(found.into_iter().filter(|id| {
-                    self.view
-                        .node(*id)
-                        .is_some_and(|n| self.view.node_layer(n) == s.mesh_layer)
-                }))
-            }
+            } => self.room_objects(*room).map_or_else(Vec::new, |o| {
+                let found = o
+                    .visible_objects(*eye, *dir, *half_angle_deg, *range)
+                    .unwrap_or_default();
+                found.into_iter().map(|n| n.0).collect()
+            }),
             Query::Label { label } => query::nodes_with_label(self.view, Scope::Graph, label)
                 .into_iter()
                 .map(|n| n.0)

@@ -2,17 +2,20 @@
 //! mutation calls to keep them exact, and what the snapshot archives.
 //!
 //! # Invariants (checked by [`SceneGraph::check_indexes`])
-//! - A layer index holds exactly one entry `(point, handle(node))` per point of every
-//!   node of its layer.
+//! - A layer index holds exactly one live entry `(point, handle(node))` per point of
+//!   every node of its layer.
 //! - A node index holds exactly one such entry per point of every node in its root's
 //!   sub-tree (the root included).
+//! - Live entries are those of the kd-tree less the dead ones of nodes moved wholesale,
+//!   plus those nodes' points in the overlay (see `OverlaidTree`).
 //! - Handles are dense `u32`s naming nodes: a node's handle is stored in the node
 //!   (`Node::index_handle`) and `ids[handle]` is the node.
 //!
 //! A node index changes when any node below its root changes, so the hooks touch the
 //! root's layer: a node index is republished with its root's layer.
 
-use super::{LiveIndex, LiveKdTree, build_tree};
+use super::overlay::OverlaidTree;
+use super::{LiveIndex, build_tree};
 use crate::error::{EditResult, GraphEditError};
 use crate::graph::{Change, Node};
 use crate::snapshot::{LayerSegment, NodeIndexSegment};
@@ -28,8 +31,8 @@ const NO_HANDLE: u32 = u32::MAX;
 pub(crate) struct LiveIndexes {
     ids: Vec<NodeId>,
     free: Vec<u32>,
-    layers: BTreeMap<LayerId, LiveKdTree>,
-    nodes: FxHashMap<NodeId, LiveKdTree>,
+    layers: BTreeMap<LayerId, OverlaidTree>,
+    nodes: FxHashMap<NodeId, OverlaidTree>,
 }
 
 impl LiveIndexes {
@@ -79,17 +82,6 @@ impl LiveIndexes {
     }
 }
 
-fn apply(tree: &mut LiveKdTree, h: u32, old: &[Point], new: &[Point]) {
-    let (old, new) = crate::id::changed_points(old, new);
-    for p in old {
-        let found = tree.remove(*p, h);
-        debug_assert!(found, "indexed point {p:?} missing");
-    }
-    for p in new {
-        tree.insert(*p, h);
-    }
-}
-
 impl SceneGraph {
     /// Enables the layer index of `layer`: a kd-tree over every point of the layer, kept
     /// exact by every later mutation. [`crate::query::nearest_nodes`] and
@@ -123,7 +115,7 @@ impl SceneGraph {
         }
         self.indexes
             .layers
-            .insert(layer, LiveKdTree::from_entries(entries));
+            .insert(layer, OverlaidTree::from_entries(entries));
         self.touch_layer(layer, Change::All);
         Ok(())
     }
@@ -172,7 +164,7 @@ impl SceneGraph {
         }
         self.indexes
             .nodes
-            .insert(node, LiveKdTree::from_entries(entries));
+            .insert(node, OverlaidTree::from_entries(entries));
         self.touch_layer(layer, Change::All);
         Ok(())
     }
@@ -239,10 +231,11 @@ impl SceneGraph {
             .handle(self.nodes.get_mut(&id).expect("changed node"));
         let new = &self.nodes[&id].points;
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
-            apply(t, h, old, new);
+            t.apply(h, old, new);
         }
         for &r in &roots {
-            apply(self.indexes.nodes.get_mut(&r).expect("listed"), h, old, new);
+            let t = self.indexes.nodes.get_mut(&r).expect("listed");
+            t.apply(h, old, new);
         }
         for r in roots {
             let rl = self.nodes[&r].layer;
@@ -279,9 +272,9 @@ impl SceneGraph {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
             for (h, points) in &moved {
                 if added {
-                    apply(t, *h, &[], points);
+                    t.apply(*h, &[], points);
                 } else {
-                    apply(t, *h, points, &[]);
+                    t.apply(*h, points, &[]);
                 }
             }
             let rl = self.nodes[&r].layer;
@@ -298,7 +291,7 @@ impl SceneGraph {
         if node.index_handle != NO_HANDLE
             && let Some(t) = self.indexes.layers.get_mut(&node.layer)
         {
-            apply(t, node.index_handle, &node.points, &[]);
+            t.apply(node.index_handle, &node.points, &[]);
         }
         self.indexes.release(node);
     }
@@ -374,7 +367,7 @@ impl SceneGraph {
             v.sort_unstable();
             v
         };
-        let actual = |t: &LiveKdTree| -> Result<Vec<(u64, [u32; 3])>, String> {
+        let actual = |t: &OverlaidTree| -> Result<Vec<(u64, [u32; 3])>, String> {
             let mut v = Vec::with_capacity(t.len());
             for e in t.entries() {
                 let id = self.indexes.ids.get(e.item as usize).copied();

@@ -4,7 +4,7 @@
 //!
 //! | index | type | kept by | items |
 //! |---|---|---|---|
-//! | live | [`LiveIndex`] over a [`LiveKdTree`] | [`crate::SceneGraph`], updated by every mutation | node handles |
+//! | live | [`LiveIndex`] over a [`LiveKdTree`] plus an overlay of nodes moved wholesale | [`crate::SceneGraph`], updated by every mutation | node handles |
 //! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
 //! | reader-built | [`KdIndex`]: kiddo's `ImmutableKdTree`, kept archived | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
 //!
@@ -26,6 +26,7 @@
 mod kdtree;
 mod live;
 mod maintain;
+mod overlay;
 
 pub use kdtree::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree};
 pub(crate) use kdtree::{build_tree, check_tree};
@@ -72,12 +73,12 @@ pub trait SpatialIndex {
 /// and [`SceneView::node_index`] return it for a [`crate::SceneGraph`].
 #[derive(Clone, Copy, Debug)]
 pub struct LiveIndex<'a> {
-    tree: &'a LiveKdTree,
+    tree: &'a overlay::OverlaidTree,
     ids: &'a [NodeId],
 }
 
 impl<'a> LiveIndex<'a> {
-    pub(crate) fn new(tree: &'a LiveKdTree, ids: &'a [NodeId]) -> Self {
+    pub(crate) fn new(tree: &'a overlay::OverlaidTree, ids: &'a [NodeId]) -> Self {
         LiveIndex { tree, ids }
     }
 }

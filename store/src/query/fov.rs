@@ -217,6 +217,25 @@ pub fn visible<V: SceneView>(
     Ok(out)
 }
 
+/// Whether `index` holds a point inside the cone (the test of [`visible`]): one radius
+/// search over the ball around the cone, testing points against the cone only until
+/// the first one inside.
+///
+/// # Errors
+/// As [`visible`].
+pub(crate) fn index_sees<I: SpatialIndex>(
+    index: &I,
+    cone: &ConeView,
+) -> Result<bool, SpatialQueryError> {
+    let cone = cone.checked()?;
+    let (centre, ball2) = cone.ball;
+    let mut hit = false;
+    index.points_within(&centre, ball2, |_, _, p| {
+        hit = hit || cone.contains(p);
+    });
+    Ok(hit)
+}
+
 impl ConeView {
     /// Whether `p` is inside the cone: exactly the test [`visible`] applies to every
     /// point.

@@ -15,12 +15,14 @@ mod pattern;
 mod spatial;
 mod traverse;
 
+pub(crate) use fov::index_sees;
 #[doc(inline)]
 pub use fov::{ConeView, visible};
 #[doc(inline)]
 pub use pattern::{
     edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,
 };
+pub(crate) use spatial::radius_bound;
 #[doc(inline)]
 pub use spatial::{
     SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes, nodes_within_radius,
@@ -52,9 +54,19 @@ impl Scope {
 
     /// The layers of `view` inside this scope.
     pub fn layers<V: SceneView>(&self, view: &V) -> Vec<LayerId> {
-        match self {
-            Scope::Graph => view.layers().collect(),
-            Scope::Layer(l) => view.layer_name(*l).map(|_| *l).into_iter().collect(),
-        }
+        self.iter(view).collect()
+    }
+
+    /// The layers of `view` inside this scope, ascending, without allocating: one
+    /// lookup for a layer scope (no walk over the layer list).
+    pub(crate) fn iter<'v, V: SceneView>(
+        &self,
+        view: &'v V,
+    ) -> impl Iterator<Item = LayerId> + use<'v, V> {
+        let (all, one) = match *self {
+            Scope::Graph => (Some(view.layers()), None),
+            Scope::Layer(l) => (None, view.layer_name(l).map(|_| l)),
+        };
+        all.into_iter().flatten().chain(one)
     }
 }

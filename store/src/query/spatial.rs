@@ -299,7 +299,7 @@ pub fn nearest_nodes<V: SceneView>(
     if m == 0 {
         return Ok(Vec::new());
     }
-    for layer in view.layers().filter(|&l| scope.contains(l)) {
+    for layer in scope.iter(view) {
         if let Some(index) = view.layer_index(layer) {
             index_nearest(&index, &c, &mut top);
             continue;
@@ -368,7 +368,7 @@ pub fn nodes_within_radius<V: SceneView>(
     }
     let r2 = radius_bound(r);
     let mut out = Vec::new();
-    for layer in view.layers().filter(|&l| scope.contains(l)) {
+    for layer in scope.iter(view) {
         if let Some(index) = view.layer_index(layer) {
             index_within(&index, &c, r2, &mut out);
             continue;
