@@ -12,14 +12,15 @@
 //! * `q1a`: for the ladder's `after_update_ipc` rows: blocks in [`SceneReader::wait_next`];
 //!   on each new snapshot answers the Q1a given by `--layout`, `--room` and `--point`
 //!   through the ladder's query code and prints the answer at once as an
-//!   [`AnswerLine`] (`q1a <gen> <visible> <answered> <ids>`).
+//!   [`AnswerLine`] (`q1a <gen> <visible> <answered> <ids> <checksum>`, the checksum of
+//!   the `--object`'s mesh taken after the answer).
 //! * `socket`: the Hydra-style baseline: reads length-prefixed frames from a Unix socket,
 //!   deserializes each into an owned [`PlainGraph`] and prints `sock <seq> <done ns>
 //!   <nodes>`.
 
 use super::socket::PlainGraph;
 use super::{Res, unix_ns};
-use crate::ladder::after_ipc::AnswerLine;
+use crate::ladder::after_ipc::{AnswerLine, mesh_checksum};
 use crate::ladder::harness::Target;
 use crate::ladder::workload::Query;
 use crate::ladder::ygg::YggTarget;
@@ -30,7 +31,7 @@ use std::time::{Duration, Instant};
 use ygg_reader::{ReaderBuilder, ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::layout::Layout;
 use ygg_store::query::nearest_nodes;
-use ygg_store::{ArchivedScene, Point, SceneView, Scope};
+use ygg_store::{ArchivedScene, NodeId, Point, SceneView, Scope};
 
 /// Options of the hidden `ygg-bench ipc reader`.
 #[derive(clap::Args, Debug)]
@@ -65,6 +66,9 @@ pub struct ReaderArgs {
     /// Point of the Q1a query, `x,y,z` (q1a mode).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     point: Vec<f32>,
+    /// The object the writer moves; its mesh checksum goes with each answer (q1a mode).
+    #[arg(long)]
+    object: Option<u64>,
 }
 
 /// Reader behaviours.
@@ -280,6 +284,7 @@ fn qps(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
 fn q1a(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
     let layout = args.layout.ok_or("q1a mode needs --layout")?;
     let room = args.room.ok_or("q1a mode needs --room")?;
+    let object = NodeId(args.object.ok_or("q1a mode needs --object")?);
     let point: Point = args.point[..]
         .try_into()
         .map_err(|_| format!("--point needs x,y,z, got {:?}", args.point))?;
@@ -303,6 +308,7 @@ fn q1a(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
                     visible_ns,
                     answered_ns,
                     ids,
+                    mesh_checksum: mesh_checksum(&view, object),
                 };
                 println!("{line}");
             }

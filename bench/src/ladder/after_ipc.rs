@@ -4,12 +4,14 @@
 //! graph moves one object's mesh (the mutation of `after_update_local`) and publishes. A
 //! separate reader process (`ygg-bench ipc reader --mode q1a`, see [`crate::ipc::child`])
 //! blocks for the next snapshot, answers the same Q1a on it through [`YggTarget`] and
-//! prints an [`AnswerLine`] at once.
+//! prints an [`AnswerLine`] at once (with, computed after the answer, a checksum of the
+//! moved object's mesh in the snapshot).
 //!
-//! Writer and reader run in lockstep: the writer waits for the answer of each publish,
-//! checks it against the answer of its live graph for the generation just published
-//! (a wrong or stale answer fails the run) and pauses a few ms before the next mutation,
-//! so the reader is back to waiting. Latency: Unix ns just before the mutation (writer)
+//! Writer and reader run in lockstep: the writer waits for the answer of each publish and
+//! checks generation, answer and checksum against its live graph (a wrong or stale
+//! answer fails the run; the office's Q1a answer is the same object before and after the
+//! move, so the checksum is what shows the snapshot holds the moved mesh), then pauses a
+//! few ms before the next mutation, so the reader is back to waiting. Latency: Unix ns just before the mutation (writer)
 //! to Unix ns once the reader computed the answer (same host clock).
 
 use super::Answer;
@@ -35,9 +37,9 @@ const WARMUP: usize = 3;
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// One answer of a reader in q1a mode:
-/// `q1a <generation> <visible ns> <answered ns> <ids>`, the ids comma-separated (`-` for
-/// none).
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// `q1a <generation> <visible ns> <answered ns> <ids> <mesh checksum>`, the ids
+/// comma-separated (`-` for none).
+#[derive(Clone, Debug, PartialEq)]
 pub struct AnswerLine {
     /// Generation of the snapshot the query ran on.
     pub generation: u64,
@@ -47,6 +49,22 @@ pub struct AnswerLine {
     pub answered_ns: u64,
     /// The answer (sorted object ids).
     pub ids: Answer,
+    /// [`mesh_checksum`] of the moved object in the snapshot.
+    pub mesh_checksum: f64,
+}
+
+/// A checksum of `object`'s mesh in `view`: the sum of every coordinate of its mesh
+/// nodes (ids ascending), in f64, so the same points give the same bits in the writer's
+/// live graph and in a reader's snapshot.
+pub fn mesh_checksum<V: SceneView>(view: &V, object: NodeId) -> f64 {
+    let mut mesh = ygg_store::query::children(view, object);
+    mesh.sort_unstable();
+    mesh.iter()
+        .filter_map(|&m| view.node(m))
+        .flat_map(|n| view.points(n))
+        .flatten()
+        .map(|&c| f64::from(c))
+        .sum()
 }
 
 impl fmt::Display for AnswerLine {
@@ -57,7 +75,7 @@ impl fmt::Display for AnswerLine {
             self.generation, self.visible_ns, self.answered_ns
         )?;
         if self.ids.is_empty() {
-            return f.write_str("-");
+            f.write_str("-")?;
         }
         for (i, id) in self.ids.iter().enumerate() {
             if i > 0 {
@@ -65,7 +83,7 @@ impl fmt::Display for AnswerLine {
             }
             write!(f, "{id}")?;
         }
-        Ok(())
+        write!(f, " {}", self.mesh_checksum)
     }
 }
 
@@ -75,7 +93,7 @@ impl FromStr for AnswerLine {
     fn from_str(line: &str) -> Result<Self, String> {
         let bad = || format!("malformed answer line {line:?}");
         let words: Vec<&str> = line.split_whitespace().collect();
-        let [TAG, generation, visible, answered, ids] = words[..] else {
+        let [TAG, generation, visible, answered, ids, checksum] = words[..] else {
             return Err(bad());
         };
         let number = |s: &str| s.parse::<u64>().map_err(|_| bad());
@@ -88,6 +106,7 @@ impl FromStr for AnswerLine {
             visible_ns: number(visible)?,
             answered_ns: number(answered)?,
             ids,
+            mesh_checksum: checksum.parse().map_err(|_| bad())?,
         })
     }
 }
@@ -111,7 +130,7 @@ struct Samples {
     mutate: Vec<f64>,
     /// `publish()`.
     publish: Vec<f64>,
-    /// `publish()` returned → the reader held the view.
+    /// `publish()` called → the reader held the view.
     visible: Vec<f64>,
     /// View → answer in the reader.
     query: Vec<f64>,
@@ -169,13 +188,13 @@ pub fn after_update_ipc(
             p99_us,
         });
         details.push(format!(
-            "{layout} {} + {} ({} of {} layers, {:.0} KB) + {} + {}",
+            "{layout} {} + {} ({} of {} layers, {:.0} KB; the call {}) + {}",
             fmt_us(median_p99(&mut s.mutate).0),
-            fmt_us(median_p99(&mut s.publish).0),
+            fmt_us(median_p99(&mut s.visible).0),
             s.layers_sent,
             s.layers_total,
             s.bytes_sent as f64 / 1e3,
-            fmt_us(median_p99(&mut s.visible).0),
+            fmt_us(median_p99(&mut s.publish).0),
             fmt_us(median_p99(&mut s.query).0),
         ));
     }
@@ -191,11 +210,11 @@ pub fn after_update_ipc(
     };
     let notes = vec![
         format!(
-            "`after_update_ipc`: the mutation of `after_update_local`, with the ladder process as the writer (a `SceneWriter` owning a clone of the target's graph) and a separate reader process (`ygg-bench ipc reader --mode q1a`) that blocks for the next snapshot and answers the same Q1a on it. Time from just before the mutation (writer clock) to the answer in the reader (reader clock, same host): mutation + `publish()` of the changed layers + wake-up + validation of the changed layers + view + query in another process. Writer and reader in lockstep, one publish every ~{} ms; every answer (warm-up included) is checked against the writer's answer on its live graph for the generation just published, a wrong or stale one fails the run. {n} samples per target after {WARMUP} warm-up; each target in a fresh scene, {left}.",
+            "`after_update_ipc`: the mutation of `after_update_local`, with the ladder process as the writer (a `SceneWriter` owning a clone of the target's graph) and a separate reader process (`ygg-bench ipc reader --mode q1a`) that blocks for the next snapshot and answers the same Q1a on it. Time from just before the mutation (writer clock) to the answer in the reader (reader clock, same host): mutation + `publish()` of the changed layers + wake-up + validation of the changed layers + view + query in another process. Writer and reader in lockstep, one publish every ~{} ms; every answer (warm-up included) is checked against the writer's live graph: generation just published, answer ids, and a checksum of the moved object's mesh in the snapshot (computed after the answer, not timed; the ids alone do not change with this move); a wrong or stale answer fails the run. {n} samples per target after {WARMUP} warm-up; each target in a fresh scene, {left}.",
             gap.as_millis()
         ),
         format!(
-            "`after_update_ipc` split, medians in µs (mutation + publish() (layers, bytes sent) + publish() returned → reader holds the view + view → answer): {}.",
+            "`after_update_ipc` split, medians in µs: mutation + `publish()` called → the reader holds the new snapshot's view (layers and bytes republished; the `publish()` call alone) + view → answer (includes finding the room's query scope on the new snapshot, `YggTarget::new`, which `after_update_local` does once): {}.",
             details.join("; ")
         ),
     ];
@@ -231,6 +250,8 @@ fn measure(
         "--room".into(),
         room.to_string(),
         format!("--point={},{},{}", point[0], point[1], point[2]),
+        "--object".into(),
+        w.update_object.to_string(),
     ];
     let mut reader = ReaderProc::spawn(format!("{layout} q1a reader"), scene, &args)?;
     reader.expect("ready", Instant::now() + ATTACH_TIMEOUT)?;
@@ -260,10 +281,14 @@ fn measure(
             .expect(TAG, Instant::now() + ANSWER_TIMEOUT)?
             .parse()?;
         let want = YggTarget::new(String::new(), layout, writer.graph()).answer(&query);
-        if got.generation != report.generation || got.ids != want {
+        let checksum = mesh_checksum(writer.graph(), NodeId(w.update_object));
+        if got.generation != report.generation
+            || got.ids != want
+            || got.mesh_checksum.to_bits() != checksum.to_bits()
+        {
             return Err(format!(
-                "{layout}: wrong or stale answer after an update: the reader answered {:?} on generation {}, the writer's live graph answers {want:?} after publishing generation {}",
-                got.ids, got.generation, report.generation
+                "{layout}: wrong or stale answer after an update: the reader answered {:?} (mesh checksum {}) on generation {}, the writer's live graph answers {want:?} (mesh checksum {checksum}) after publishing generation {}",
+                got.ids, got.mesh_checksum, got.generation, report.generation
             )
             .into());
         }
@@ -271,7 +296,7 @@ fn measure(
             s.total.push(got.answered_ns.saturating_sub(t0) as f64);
             s.mutate.push(t1.saturating_sub(t0) as f64);
             s.publish.push(t2.saturating_sub(t1) as f64);
-            s.visible.push(got.visible_ns.saturating_sub(t2) as f64);
+            s.visible.push(got.visible_ns.saturating_sub(t1) as f64);
             s.query
                 .push(got.answered_ns.saturating_sub(got.visible_ns) as f64);
             s.layers_sent = report.layers_sent;
@@ -296,11 +321,12 @@ mod tests {
                 visible_ns: 1_700_000_000_000_000_000,
                 answered_ns: 1_700_000_000_000_004_321,
                 ids,
+                mesh_checksum: -1_234.567_890_123_4,
             };
             assert_eq!(line.to_string().parse::<AnswerLine>(), Ok(line));
         }
         assert_eq!(
-            "q1a 4 10 20 -".parse::<AnswerLine>().map(|l| l.ids),
+            "q1a 4 10 20 - 0.5".parse::<AnswerLine>().map(|l| l.ids),
             Ok(vec![])
         );
     }
@@ -309,12 +335,13 @@ mod tests {
     fn malformed_answer_lines_are_rejected() {
         for line in [
             "",
-            "q1a 4 10 20",
-            "q1a 4 10 20 1,2 extra",
-            "seen 4 10 20 1",
-            "q1a 4 10 x 1",
-            "q1a 4 10 20 1,,2",
-            "q1a -4 10 20 1",
+            "q1a 4 10 20 1",
+            "q1a 4 10 20 1,2 0.5 extra",
+            "seen 4 10 20 1 0.5",
+            "q1a 4 10 x 1 0.5",
+            "q1a 4 10 20 1,,2 0.5",
+            "q1a -4 10 20 1 0.5",
+            "q1a 4 10 20 1 x",
         ] {
             assert!(line.parse::<AnswerLine>().is_err(), "{line:?} parsed");
         }
