@@ -1,18 +1,19 @@
 //! Query after an update, across processes (the `after_update_ipc` rows).
 //!
-//! The ladder process is the writer: a [`SceneWriter`] owning a clone of the target's
-//! graph moves one object's mesh (the mutation of `after_update_local`) and publishes. A
-//! separate reader process (`ygg-bench ipc reader --mode q1a`, see [`crate::ipc::child`])
-//! blocks for the next snapshot, answers the same Q1a on it through [`YggTarget`] and
-//! prints an [`AnswerLine`] at once (with, computed after the answer, a checksum of the
-//! moved object's mesh in the snapshot).
+//! The ladder process is the writer: a [`ygg_writer::SceneWriter`] owning a clone of the
+//! target's graph moves one object's mesh (the mutation of `after_update_local`) and
+//! publishes. A separate reader process (`ygg-bench ipc reader --mode q1a`, spawned
+//! through [`crate::ipc::child`]) blocks for the next snapshot, answers the same Q1a on
+//! it through [`YggTarget`] and prints an [`AnswerLine`] at once (with a checksum of the
+//! moved object's mesh in the snapshot, computed after the answer).
 //!
-//! Writer and reader run in lockstep: the writer waits for the answer of each publish and
+//! Writer and reader run in lockstep: the writer waits for the answer to each publish and
 //! checks generation, answer and checksum against its live graph (a wrong or stale
 //! answer fails the run; the office's Q1a answer is the same object before and after the
 //! move, so the checksum is what shows the snapshot holds the moved mesh), then pauses a
-//! few ms before the next mutation, so the reader is back to waiting. Latency: Unix ns just before the mutation (writer)
-//! to Unix ns once the reader computed the answer (same host clock).
+//! few ms before the next mutation, so the reader is back to waiting. Latency: Unix ns
+//! just before the mutation (writer) to Unix ns once the reader has the answer (same host
+//! clock).
 
 use super::Answer;
 use super::harness::{Row, Target, median_p99};
