@@ -43,9 +43,9 @@ const QUERY_LAYER: &str = "PLACES";
 /// Size of the socket-vs-shared-memory graph.
 const BIG_BYTES: usize = 40_000_000;
 /// How long readers may take to attach and validate their first snapshot.
-const ATTACH_TIMEOUT: Duration = Duration::from_secs(60);
+pub(crate) const ATTACH_TIMEOUT: Duration = Duration::from_secs(60);
 /// How long readers may take to exit when told.
-const EXIT_GRACE: Duration = Duration::from_secs(5);
+pub(crate) const EXIT_GRACE: Duration = Duration::from_secs(5);
 
 /// Sample counts and durations.
 struct Plan {
@@ -281,24 +281,16 @@ fn run_round(ctx: &mut Ctx, groups: &[Group]) -> Res<Vec<Row>> {
 fn in_scene<T>(ctx: &mut Ctx, tag: &str, f: impl FnOnce(&mut Ctx, &Scene) -> Res<T>) -> Res<T> {
     let scene = Scene::new(tag);
     let result = f(ctx, &scene);
-    let left = scene.leftovers();
-    if result.is_ok() && !left.is_empty() {
-        ctx.leftovers.push(format!(
-            "{}: {} files ({})",
-            scene.name,
-            left.len(),
-            left.iter()
-                .take(3)
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
+    if let Some(left) = scene.clean_up()
+        && result.is_ok()
+    {
+        ctx.leftovers.push(left);
     }
-    scene.remove_files();
     result
 }
 
-fn writer(
+/// A writer for `scene` owning `graph`, which it publishes once.
+pub(crate) fn writer(
     scene: &Scene,
     graph: SceneGraph,
     max_readers: usize,
@@ -339,10 +331,11 @@ type Seen = HashMap<u64, [u64; 2]>;
 
 /// A tiny deterministic jitter source (±25 %) so publishes do not lock into phase with
 /// periodic activity (liveness checks, timers).
-struct Jitter(u64);
+pub(crate) struct Jitter(pub(crate) u64);
 
 impl Jitter {
-    fn apply(&mut self, d: Duration) -> Duration {
+    /// `d` scaled by a factor between 0.75 and 1.25 (the next in the sequence).
+    pub(crate) fn apply(&mut self, d: Duration) -> Duration {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 7;
         self.0 ^= self.0 << 17;

@@ -45,9 +45,28 @@ impl Scene {
         }
     }
 
+    /// Once every process of the scene has exited: describes the files it left behind
+    /// (`None` when there are none) and removes them.
+    pub fn clean_up(&self) -> Option<String> {
+        let left = self.leftovers();
+        self.remove_files();
+        (!left.is_empty()).then(|| {
+            format!(
+                "{}: {} files ({})",
+                self.name,
+                left.len(),
+                left.iter()
+                    .take(3)
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+    }
+
     /// Files of this scene's prefix, except iceoryx2's per-prefix `*.global_mgmt` counter
     /// (kept by iceoryx2 by design).
-    pub fn leftovers(&self) -> Vec<PathBuf> {
+    fn leftovers(&self) -> Vec<PathBuf> {
         let mut found = Vec::new();
         collect(
             Path::new(SHM_DIR),
@@ -64,7 +83,7 @@ impl Scene {
     }
 
     /// Removes every file of this prefix (once every process of the scene has exited).
-    pub fn remove_files(&self) {
+    fn remove_files(&self) {
         let mut found = Vec::new();
         collect(
             Path::new(SHM_DIR),

@@ -11,8 +11,8 @@
 //! answered on it. From `publish()` returning to visible is the transport-and-validation
 //! part alone.
 
-mod cases;
-mod child;
+pub(crate) mod cases;
+pub(crate) mod child;
 mod reader;
 mod report;
 mod scenes;

@@ -9,19 +9,29 @@
 //!   `seen <gen> <visible> <answered>` lines and `end`.
 //! * `qps`: on `start`, loops `latest()` + nearest-node query on the newest snapshot until
 //!   `stop`, then prints `qps <queries> <elapsed ns> <median ns> <p99 ns> <snapshots>`.
+//! * `q1a`: for the ladder's `after_update_ipc` rows: blocks in [`SceneReader::wait_next`];
+//!   on each new snapshot answers the Q1a given by `--layout`, `--room` and `--point`
+//!   through the ladder's query code and prints the answer at once as an
+//!   [`AnswerLine`] (`q1a <gen> <visible> <answered> <ids> <checksum>`, the checksum of
+//!   the `--object`'s mesh taken after the answer).
 //! * `socket`: the Hydra-style baseline: reads length-prefixed frames from a Unix socket,
 //!   deserializes each into an owned [`PlainGraph`] and prints `sock <seq> <done ns>
 //!   <nodes>`.
 
 use super::socket::PlainGraph;
 use super::{Res, unix_ns};
+use crate::ladder::after_ipc::{AnswerLine, mesh_checksum};
+use crate::ladder::harness::Target;
+use crate::ladder::workload::Query;
+use crate::ladder::ygg::YggTarget;
 use std::io::{BufRead, Read, Write};
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
 use std::time::{Duration, Instant};
 use ygg_reader::{ReaderBuilder, ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
+use ygg_store::layout::Layout;
 use ygg_store::query::nearest_nodes;
-use ygg_store::{ArchivedScene, Point, SceneView, Scope};
+use ygg_store::{ArchivedScene, NodeId, Point, SceneView, Scope};
 
 /// Options of the hidden `ygg-bench ipc reader`.
 #[derive(clap::Args, Debug)]
@@ -47,6 +57,18 @@ pub struct ReaderArgs {
     /// Index among the case's readers (seeds the query points).
     #[arg(long, default_value_t = 0)]
     index: usize,
+    /// Layout the scene was built with (q1a mode).
+    #[arg(long)]
+    layout: Option<Layout>,
+    /// Room of the Q1a query (q1a mode).
+    #[arg(long)]
+    room: Option<u64>,
+    /// Point of the Q1a query, `x,y,z` (q1a mode).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    point: Vec<f32>,
+    /// The object the writer moves; its mesh checksum goes with each answer (q1a mode).
+    #[arg(long)]
+    object: Option<u64>,
 }
 
 /// Reader behaviours.
@@ -56,6 +78,8 @@ pub enum Mode {
     Latency,
     /// Query in a loop.
     Qps,
+    /// Answer the ladder's Q1a on every new snapshot.
+    Q1a,
     /// Deserialize frames from a Unix socket.
     Socket,
 }
@@ -82,6 +106,7 @@ pub fn main(args: &ReaderArgs) -> Res<()> {
     match args.mode {
         Mode::Latency => latency(args, &commands),
         Mode::Qps => qps(args, &commands),
+        Mode::Q1a => q1a(args, &commands),
         Mode::Socket => socket(args),
     }
 }
@@ -252,6 +277,44 @@ fn qps(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
         );
         if exit {
             return Ok(());
+        }
+    }
+}
+
+fn q1a(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
+    let layout = args.layout.ok_or("q1a mode needs --layout")?;
+    let room = args.room.ok_or("q1a mode needs --room")?;
+    let object = NodeId(args.object.ok_or("q1a mode needs --object")?);
+    let point: Point = args.point[..]
+        .try_into()
+        .map_err(|_| format!("--point needs x,y,z, got {:?}", args.point))?;
+    let query = Query::Nearest { room, point };
+    let (mut reader, first) = attach(args)?;
+    println!("ready {}", first.generation());
+    drop(first);
+    loop {
+        match commands.try_recv() {
+            Ok(Cmd::Exit) | Err(TryRecvError::Disconnected) => return Ok(()),
+            Ok(_) | Err(TryRecvError::Empty) => {}
+        }
+        match reader.wait_next(Duration::from_millis(20)) {
+            Ok(Some(snapshot)) => {
+                let view = snapshot.view();
+                let visible_ns = unix_ns();
+                let ids = YggTarget::new(String::new(), layout, &view).answer(&query);
+                let answered_ns = unix_ns();
+                let line = AnswerLine {
+                    generation: view.generation(),
+                    visible_ns,
+                    answered_ns,
+                    ids,
+                    mesh_checksum: mesh_checksum(&view, object),
+                };
+                println!("{line}");
+            }
+            Ok(None) => {}
+            Err(SceneReceiveError::Receive(ReceiveError::Terminated)) => return Ok(()),
+            Err(e) => return Err(e.into()),
         }
     }
 }

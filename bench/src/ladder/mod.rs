@@ -1,6 +1,7 @@
 //! `ygg-bench ladder`: the paper's ablation ladder (dsg, vanilla, chocolate, mint,
 //! saffron) on the office workload, with answers checked identical before timing.
 
+pub mod after_ipc;
 pub mod flat_dsg;
 pub mod harness;
 pub mod kiddo_floor;
@@ -154,6 +155,9 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         &dsg,
         if args.quick { 20 } else { 200 },
     ));
+    let (ipc_rows, ipc_notes) = after_ipc::after_update_ipc(&graphs, &workload, &dsg, args.quick)?;
+    rows.extend(ipc_rows);
+    notes.extend(ipc_notes);
 
     if !args.no_spark_dsg {
         match spark_dsg_anchor(&dsg, args, &workload, &answers) {
