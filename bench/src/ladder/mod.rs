@@ -178,6 +178,9 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         notes,
     };
     if let Some(path) = &args.json {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
         std::fs::write(path, serde_json::to_string_pretty(&report.to_json())?)?;
         eprintln!("wrote {}", path.display());
     }
