@@ -262,19 +262,7 @@ fn measure(
         check_interrupted()?;
         std::thread::sleep(jitter.apply(gap));
         let t0 = unix_ns();
-        for (m, original) in &mesh {
-            // Alternate between the moved and the original geometry, as
-            // `after_update_local` does.
-            let points: Vec<Point> = if i % 2 == 0 {
-                original
-                    .iter()
-                    .map(|p| [0, 1, 2].map(|a| p[a] + w.update_translation[a]))
-                    .collect()
-            } else {
-                original.clone()
-            };
-            writer.graph_mut().set_geometry(*m, points)?;
-        }
+        super::move_object(writer.graph_mut(), &mesh, w, i)?;
         let t1 = unix_ns();
         let report = writer.publish()?;
         let t2 = unix_ns();

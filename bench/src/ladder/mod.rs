@@ -292,20 +292,7 @@ fn after_update_local(
         let mut samples = Vec::with_capacity(n);
         for i in 0..n {
             let t = Instant::now();
-            for (m, original) in &mesh {
-                // Alternate between the moved and the original geometry, so the graph
-                // ends bit-for-bit as it started.
-                let points: Vec<[f32; 3]> = if i % 2 == 0 {
-                    original
-                        .iter()
-                        .map(|p| [0, 1, 2].map(|a| p[a] + w.update_translation[a]))
-                        .collect()
-                } else {
-                    original.clone()
-                };
-                g.set_geometry(*m, points)
-                    .expect("moving an existing mesh node");
-            }
+            move_object(g, &mesh, w, i).expect("moving an existing mesh node");
             let target = ygg::YggTarget::with_scopes(String::new(), *l, &*g, &scopes);
             std::hint::black_box(target.answer(&q));
             samples.push(t.elapsed().as_nanos() as f64);
@@ -319,6 +306,29 @@ fn after_update_local(
         });
     }
     rows
+}
+
+/// The after-update mutation, sample `i`: the object's mesh nodes (`mesh`: id and
+/// original points) translated by the workload's translation on even samples and put
+/// back on odd ones, so the graph ends bit-for-bit as it started.
+pub(crate) fn move_object(
+    g: &mut SceneGraph,
+    mesh: &[(NodeId, Vec<[f32; 3]>)],
+    w: &Workload,
+    i: usize,
+) -> ygg_store::EditResult {
+    for (m, original) in mesh {
+        let points: Vec<[f32; 3]> = if i.is_multiple_of(2) {
+            original
+                .iter()
+                .map(|p| [0, 1, 2].map(|a| p[a] + w.update_translation[a]))
+                .collect()
+        } else {
+            original.clone()
+        };
+        g.set_geometry(*m, points)?;
+    }
+    Ok(())
 }
 
 /// Runs the Spark-DSG Python anchor on the same input and workload.
