@@ -120,6 +120,14 @@ impl<F: FnMut(f32, u32) -> f32> Walk<'_, F> {
                 }
                 s = 2 * s + right;
                 level += 1;
+                // Eytzinger order puts the children of `s` at `2s`, `2s + 1` and its 16
+                // descendants four levels down at `16s..16s + 16` (one cache line of
+                // stems): ask for both now, as kiddo's own descent does, so that the
+                // loads of the levels below overlap this one's (at 10M points this
+                // took the walk from 1.3× to 1.0× kiddo's `nearest_one`).
+                let stems = self.stems.as_ptr();
+                super::prefetch(stems.wrapping_add(s.wrapping_mul(2)));
+                super::prefetch(stems.wrapping_add(s.wrapping_mul(16)));
             }
             self.leaf(s - (1 << self.levels));
         }

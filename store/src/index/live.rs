@@ -384,6 +384,67 @@ impl LiveKdTree {
 
     // ---- updates ------------------------------------------------------------------------
 
+    /// Brings into cache, for every point of `points` in every tree of `trees`, the
+    /// inner nodes on the path to the leaf the point descends to and that leaf, so that
+    /// a following [`LiveKdTree::insert`] or [`LiveKdTree::remove`] of the point finds
+    /// them there. Changes nothing.
+    ///
+    /// The descents advance in lockstep, one level each per round, so their cache
+    /// misses overlap instead of following one another: a move (a remove and an insert)
+    /// in two indexes walks its four paths in about the time of one.
+    pub(crate) fn warm_paths(trees: &[&LiveKdTree], points: &[&[Point]]) {
+        const WIDTH: usize = 8;
+        let Some(&first) = trees.first() else { return };
+        let mut batch = [(first, LEAF_BIT, [0.0f32; 3]); WIDTH];
+        let mut k = 0;
+        for &t in trees {
+            for p in points.iter().flat_map(|ps| ps.iter()) {
+                batch[k] = (t, t.root, *p);
+                k += 1;
+                if k == WIDTH {
+                    Self::warm_batch(&mut batch);
+                    k = 0;
+                }
+            }
+        }
+        Self::warm_batch(&mut batch[..k]);
+    }
+
+    fn warm_batch(batch: &mut [(&LiveKdTree, u32, Point)]) {
+        loop {
+            let mut descending = false;
+            for (t, c, p) in batch.iter_mut() {
+                if !is_leaf(*c) {
+                    let n = &t.inners[*c as usize];
+                    *c = if p[n.dim as usize] < n.split {
+                        n.left
+                    } else {
+                        n.right
+                    };
+                    descending = true;
+                }
+            }
+            if !descending {
+                break;
+            }
+        }
+        // One read per cache line of each leaf (independent reads, so they overlap
+        // too); `black_box` keeps them.
+        let mut sum = 0u32;
+        for (t, c, _) in batch.iter() {
+            let leaf = &t.leaves[leaf_index(*c)];
+            sum = sum.wrapping_add(leaf.len);
+            for i in (0..LEAF_CAP).step_by(8) {
+                sum = sum
+                    .wrapping_add(leaf.xs[i].to_bits())
+                    .wrapping_add(leaf.ys[i].to_bits())
+                    .wrapping_add(leaf.zs[i].to_bits())
+                    .wrapping_add(leaf.items[i]);
+            }
+        }
+        std::hint::black_box(sum);
+    }
+
     /// Adds one entry.
     pub fn insert(&mut self, p: Point, item: u32) {
         let mut path = std::mem::take(&mut self.path);
@@ -903,6 +964,28 @@ mod tests {
         }
         t.check().unwrap();
         assert!(t.depth() <= depth_limit(t.len()), "depth {}", t.depth());
+    }
+
+    #[test]
+    fn warming_paths_changes_nothing() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let empty = LiveKdTree::new();
+        let mut t = LiveKdTree::new();
+        for i in 0..3000 {
+            t.insert([rng.gen_range(0.0..10.0), rng.gen_range(0.0..10.0), 0.0], i);
+        }
+        for _ in 0..100 {
+            t.insert([5.0, 5.0, 0.0], 7); // a chain of identical points
+        }
+        let before = t.entries();
+        let points: Vec<Point> = (0..21)
+            .map(|_| [rng.gen_range(-1.0..11.0), rng.gen_range(-1.0..11.0), 0.0])
+            .chain([[5.0, 5.0, 0.0], [f32::MAX, f32::MIN, 0.0]])
+            .collect();
+        LiveKdTree::warm_paths(&[], &[&points]);
+        LiveKdTree::warm_paths(&[&t, &empty, &t], &[&points[..3], &[], &points[3..]]);
+        assert_eq!(t.entries(), before);
+        t.check().unwrap();
     }
 
     #[test]

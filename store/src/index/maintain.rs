@@ -22,6 +22,15 @@ use std::collections::BTreeMap;
 
 /// `Node::index_handle` of a node without a handle.
 const NO_HANDLE: u32 = u32::MAX;
+/// An update that walks between 2 and this many tree paths warms them first, all at
+/// once (see [`LiveKdTree::warm_paths`]), if its trees hold at least
+/// [`WARM_MIN_ENTRIES`] entries together. Larger updates are bulk edits that gain
+/// little; smaller trees mostly sit in cache, where warming only adds a walk
+/// (measured on a move: +30% in one 10k-point index, −5 to −12% in one 1M-point
+/// index, −19 to −29% in two 1M-point indexes).
+const WARM_LIMIT: usize = 32;
+/// See [`WARM_LIMIT`]: about what fits in a 1 MiB L2 cache, twice over.
+const WARM_MIN_ENTRIES: usize = 1 << 17;
 
 /// The live indexes of a graph and the node handles their items use.
 #[derive(Clone, Debug, Default)]
@@ -238,6 +247,20 @@ impl SceneGraph {
             .indexes
             .handle(self.nodes.get_mut(&id).expect("changed node"));
         let new = &self.nodes[&id].points;
+        let (removed, added) = crate::id::changed_points(old, new);
+        let paths = (removed.len() + added.len()) * (roots.len() + usize::from(has_layer));
+        if (2..=WARM_LIMIT).contains(&paths) {
+            let trees: Vec<&LiveKdTree> = self
+                .indexes
+                .layers
+                .get(&layer)
+                .into_iter()
+                .chain(roots.iter().map(|r| &self.indexes.nodes[r]))
+                .collect();
+            if trees.iter().map(|t| t.len()).sum::<usize>() >= WARM_MIN_ENTRIES {
+                LiveKdTree::warm_paths(&trees, &[removed, added]);
+            }
+        }
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
             apply(t, h, old, new);
         }

@@ -68,6 +68,22 @@ pub trait SpatialIndex {
     fn memory_bytes(&self) -> usize;
 }
 
+/// Starts loading the cache line holding `p` into the cache (a hint: `p` may be any
+/// address, even a dangling or wild one).
+#[inline]
+pub(crate) fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code, reason = "a prefetch hint")]
+    // SAFETY: `_mm_prefetch` only hints the cache hierarchy: it never faults, whatever
+    // the address, and changes no memory the program can observe. It needs SSE, which
+    // every x86_64 CPU has (part of the target's baseline features).
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// The live graph's index over one layer or one sub-tree, as [`SceneView::layer_index`]
 /// and [`SceneView::node_index`] return it for a [`crate::SceneGraph`].
 #[derive(Clone, Copy, Debug)]
