@@ -57,12 +57,23 @@ impl LiveIndexes {
                 h
             }
             None => {
+                if self.ids.len() == self.ids.capacity() {
+                    // Grow by an eighth rather than double: the table costs 8 bytes per
+                    // indexed node, and doubling would leave up to as much again unused.
+                    self.ids.reserve_exact(self.ids.len() / 8 + 8);
+                }
                 self.ids.push(node.id);
                 u32::try_from(self.ids.len() - 1).expect("fewer than 2^32 indexed nodes")
             }
         };
         node.index_handle = h;
         h
+    }
+
+    /// Makes room for `n` more handles at once (exactly, so that enabling an index
+    /// over many nodes leaves no slack in the table).
+    fn reserve_handles(&mut self, n: usize) {
+        self.ids.reserve_exact(n.saturating_sub(self.free.len()));
     }
 
     fn release(&mut self, node: &Node) {
@@ -118,6 +129,15 @@ impl SceneGraph {
         if self.indexes.layers.contains_key(&layer) {
             return Ok(());
         }
+        let unhandled = l
+            .nodes
+            .iter()
+            .filter(|id| {
+                let n = &self.nodes[id];
+                !n.points.is_empty() && n.index_handle == NO_HANDLE
+            })
+            .count();
+        self.indexes.reserve_handles(unhandled);
         let mut entries = Vec::new();
         for id in &l.nodes {
             let node = self.nodes.get_mut(id).expect("listed");
@@ -135,6 +155,15 @@ impl SceneGraph {
             .insert(layer, LiveKdTree::from_entries(entries));
         self.touch_layer(layer);
         Ok(())
+    }
+
+    /// Bytes held by the handle table of the live indexes: the map from the items
+    /// their kd-trees store (`u32` handles) to node ids, one entry per node that has
+    /// had points in an enabled index, shared by all live indexes of the graph. Not
+    /// included in [`crate::index::SpatialIndex::memory_bytes`] of a live index.
+    pub fn index_handle_bytes(&self) -> usize {
+        self.indexes.ids.capacity() * std::mem::size_of::<NodeId>()
+            + self.indexes.free.capacity() * std::mem::size_of::<u32>()
     }
 
     /// Disables the layer index of `layer` (nothing happens if it is not enabled).
@@ -168,8 +197,14 @@ impl SceneGraph {
         if self.indexes.nodes.contains_key(&node) {
             return Ok(());
         }
+        let members = self.indexed_members(node);
+        let unhandled = members
+            .iter()
+            .filter(|(id, _)| self.nodes[id].index_handle == NO_HANDLE)
+            .count();
+        self.indexes.reserve_handles(unhandled);
         let mut entries = Vec::new();
-        for (id, points) in self.indexed_members(node) {
+        for (id, points) in members {
             let h = self
                 .indexes
                 .handle(self.nodes.get_mut(&id).expect("member"));

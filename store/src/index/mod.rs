@@ -21,7 +21,9 @@
 //! # Memory
 //! An index stores each point's coordinates (12 bytes) and item (4 bytes). Measured
 //! totals per point: 16.5–16.8 bytes archived (kiddo's leaves, extents and stems), about
-//! 19.5 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
+//! 19.2 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
+//! The live indexes of a graph share one handle table besides (item to node id: 8 bytes
+//! per indexed node, grown by an eighth; [`crate::SceneGraph::index_handle_bytes`]).
 
 mod kdtree;
 mod live;
