@@ -248,6 +248,10 @@ impl SpatialIndex for KdIndex {
         self.ids.get(item as usize).copied()
     }
 
+    fn prefetch_node(&self, item: u32) {
+        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
+    }
+
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
         self.index().nearest_visit(c, f);
     }
@@ -293,6 +297,10 @@ impl SpatialIndex for ArchivedIndex<'_> {
 
     fn node_of(&self, item: u32) -> Option<NodeId> {
         self.ids.get(item as usize).map(|&id| NodeId(id))
+    }
+
+    fn prefetch_node(&self, item: u32) {
+        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {

@@ -736,10 +736,27 @@ impl LiveKdTree {
         } else {
             (n.right, n.left)
         };
-        self.within_in(near, c, off, r2, f);
         let mut far_off = off;
         far_off[dim] = delta.abs();
-        if cell_distance_squared(&far_off) <= r2 {
+        let visit_far = cell_distance_squared(&far_off) <= r2;
+        if visit_far {
+            // The far side is walked after the near one: start loading its first node
+            // (a whole leaf: 9 cache lines) now, so that the load overlaps that walk.
+            if is_leaf(far) {
+                let p = self
+                    .leaves
+                    .as_ptr()
+                    .wrapping_add(leaf_index(far))
+                    .cast::<u8>();
+                for line in 0..std::mem::size_of::<Leaf>().div_ceil(64) {
+                    super::prefetch(p.wrapping_add(64 * line));
+                }
+            } else {
+                super::prefetch(self.inners.as_ptr().wrapping_add(far as usize));
+            }
+        }
+        self.within_in(near, c, off, r2, f);
+        if visit_far {
             self.within_in(far, c, far_off, r2, f);
         }
     }

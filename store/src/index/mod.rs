@@ -56,6 +56,12 @@ pub trait SpatialIndex {
     /// The node an item belongs to (`None` only for an item no point carries).
     fn node_of(&self, item: u32) -> Option<NodeId>;
 
+    /// A hint that [`SpatialIndex::node_of`] will soon be asked about `item`: starts
+    /// loading its entry of the id table into the cache, so that the (in a large index,
+    /// cold) loads of many items overlap the search that finds them. Changes no result;
+    /// the default does nothing.
+    fn prefetch_node(&self, _item: u32) {}
+
     /// Branch-and-bound search from `c`, nearer cells first: calls `f(distance², item)`
     /// for every point whose squared distance is at most the current bound, and skips
     /// every cell whose points are all strictly farther than it. `f` returns the new bound
@@ -114,6 +120,10 @@ impl SpatialIndex for LiveIndex<'_> {
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
         self.tree.nearest_visit(c, f);
+    }
+
+    fn prefetch_node(&self, item: u32) {
+        prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, mut f: F) {

@@ -267,10 +267,25 @@ fn nearest_node<V: SceneView>(view: &V, scope: Scope, c: &Point) -> Option<(f32,
     best
 }
 
+/// Whether a search of `index` that maps many items to nodes should prefetch their
+/// id-table entries as it finds them ([`SpatialIndex::prefetch_node`]): in indexes of
+/// 2^16 points and more, where the table no longer sits in cache (large radius queries
+/// at 1M points: archived 1.33–1.38× → 1.10–1.28× bare kiddo; live 1.06–1.18× →
+/// 0.81–0.88×, together with the live tree's prefetching of far cells).
+pub(crate) fn prefetches_ids<I: SpatialIndex>(index: &I) -> bool {
+    index.len() >= 1 << 16
+}
+
 /// Pushes the node of every point of `index` with `distance_squared <= r2`.
 fn index_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32, out: &mut Vec<NodeId>) {
     let mut items = Vec::new();
-    index.points_within(c, r2, |_, item, _| items.push(item));
+    let prefetch = prefetches_ids(index);
+    index.points_within(c, r2, |_, item, _| {
+        if prefetch {
+            index.prefetch_node(item);
+        }
+        items.push(item);
+    });
     items.sort_unstable();
     items.dedup();
     out.extend(items.into_iter().filter_map(|i| index.node_of(i)));
