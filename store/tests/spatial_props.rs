@@ -635,7 +635,7 @@ fn large_scene_under_many_mutations_matches_brute_force() {
     }
 }
 
-/// Indexes large enough that updates warm their tree paths first (more than 2^17
+/// Indexes large enough that updates locate their tree paths first (more than 2^17
 /// entries together): moves, multi-point edits and removals keep them exact.
 #[test]
 fn updates_of_large_indexes_stay_exact() {
