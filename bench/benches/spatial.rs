@@ -6,7 +6,8 @@
 //! points in view) on the live graph (live kd-tree) and on its snapshot (kiddo's
 //! archived tree, zero-copy), against a bare kiddo `ImmutableKdTree` over the same points
 //! (the floor) and brute force; update latency (insert, move, remove one point) with no
-//! index, with the layer index, and with both indexes; index bytes per point.
+//! index, with the layer index, and with both indexes; index bytes per point (and the
+//! live indexes' shared handle table).
 //!
 //! Sizes: `YGG_SPATIAL_SIZES` (comma-separated point counts; default `10000,100000`;
 //! the issue's full run is `10000,100000,1000000,10000000`). Besides criterion's
@@ -521,9 +522,11 @@ fn report(n: usize, s: &mut Scene) {
         );
     }
     println!(
-        "\nindex bytes per point: live {:.2}, archived {:.2} (12 of them are the point's coordinates)\n",
+        "\nindex bytes per point: live {:.2}, archived {:.2} (12 of them are the point's coordinates); \
+         live handle table {:.2} (item to node id, one per indexed node, shared by the graph's live indexes)\n",
         live_bytes as f64 / n as f64,
-        archived_bytes as f64 / n as f64
+        archived_bytes as f64 / n as f64,
+        s.g.index_handle_bytes() as f64 / n as f64
     );
     println!(
         "validated open: {open_indexed:.2} ms for {mb_indexed:.1} MB with both indexes, {open_plain:.2} ms for {mb_plain:.1} MB without\n"

@@ -664,6 +664,49 @@ fn large_scene_under_many_mutations_matches_brute_force() {
     }
 }
 
+/// Indexes large enough that updates locate their tree paths first (more than 2^17
+/// entries together): moves, multi-point edits and removals keep them exact.
+#[test]
+fn updates_of_large_indexes_stay_exact() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17);
+    let mut g = SceneGraph::new();
+    let rooms = g.add_layer("rooms").unwrap();
+    let mesh = g.add_layer("mesh").unwrap();
+    g.add_layer_edge(rooms, mesh).unwrap();
+    g.add_node(NodeId(1), rooms).unwrap();
+    let n = 70_000u64;
+    let point = |rng: &mut rand_chacha::ChaCha8Rng| {
+        [0, 1, 2].map(|a| rng.gen_range(0..400) as f32 * if a == 2 { 0.01 } else { 0.25 })
+    };
+    for i in 0..n {
+        g.add_node(NodeId(100 + i), mesh).unwrap();
+        g.set_geometry(NodeId(100 + i), vec![point(&mut rng)])
+            .unwrap();
+        g.nest(NodeId(1), NodeId(100 + i)).unwrap();
+    }
+    g.enable_layer_index(mesh).unwrap();
+    g.enable_node_index(NodeId(1)).unwrap();
+    for _ in 0..3000 {
+        let id = NodeId(100 + rng.gen_range(0..n));
+        let k = [0, 1, 1, 1, 2, 5][rng.gen_range(0..6)];
+        g.set_geometry(id, (0..k).map(|_| point(&mut rng)).collect())
+            .unwrap();
+    }
+    g.check_invariants().unwrap();
+    let probes: Vec<Probe> = (0..3)
+        .map(|i| Probe {
+            c: [rng.gen_range(0..50), rng.gen_range(0..50), 0],
+            m: [1, 10, 3][i],
+            r: rng.gen_range(0..3),
+            dir: [1, rng.gen_range(-2..3), 0],
+            half_angle: rng.gen_range(1..32),
+            range: rng.gen_range(0..6),
+        })
+        .collect();
+    check_view(&g, &probes);
+}
+
 /// Flipped bits anywhere in a snapshot with indexes give an error at open, or a
 /// snapshot whose spatial queries answer without panicking.
 #[test]

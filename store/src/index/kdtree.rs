@@ -53,6 +53,10 @@ pub type ArchivedKdTree =
 /// kiddo updates its pruning bound incrementally, which can round a few ulps high.
 const WITHIN_MARGIN: f32 = 1e-4;
 
+/// [`nearest_visit`] prefetches stems in trees with at least this many stem levels
+/// (64 KiB of stems, from about 260k points); smaller stem arrays stay in cache.
+const PREFETCH_MIN_LEVELS: u32 = 14;
+
 /// Builds a [`KdTree`] over `(item, point)` entries.
 pub(crate) fn build_tree(entries: &[(u32, Point)]) -> KdTree {
     KdTree::new_from_entries(entries).expect("u32 items are given, none is generated")
@@ -80,7 +84,7 @@ pub(crate) fn nearest_visit<F: FnMut(f32, u32) -> f32>(tree: &ArchivedKdTree, c:
         bound: f32::INFINITY,
         f,
     };
-    walk.run();
+    walk.descend(1, 0, [0.0; 3]);
 }
 
 struct Walk<'a, F> {
@@ -94,34 +98,35 @@ struct Walk<'a, F> {
 }
 
 impl<F: FnMut(f32, u32) -> f32> Walk<'_, F> {
-    /// Depth-first, nearer child first; far children wait on a stack with their bound.
-    /// One descent pushes at most one cell per level (at most 30), so 32 slots suffice.
-    fn run(&mut self) {
-        let mut stack = [(0usize, 0u32, [0.0f32; 3], 0.0f32); 32];
-        stack[0] = (1, 0, [0.0; 3], 0.0);
-        let mut depth = 1;
-        while depth > 0 {
-            depth -= 1;
-            let (mut s, mut level, off, rd) = stack[depth];
-            if rd > self.bound {
-                continue;
-            }
-            while level < self.levels {
-                let dim = (level % 3) as usize;
-                let delta = self.c[dim] - self.stems[s];
-                let right = usize::from(delta >= 0.0);
-                let far_delta = delta.abs();
-                let mut far_off = off;
-                far_off[dim] = far_delta;
-                let far_rd = super::live::cell_distance_squared(&far_off);
-                if far_rd <= self.bound && depth < stack.len() {
-                    stack[depth] = (2 * s + 1 - right, level + 1, far_off, far_rd);
-                    depth += 1;
-                }
-                s = 2 * s + right;
-                level += 1;
-            }
+    /// Depth-first from stem `s` at `level` (cell offsets `off` from the query), nearer
+    /// child first; the farther child only if its cell is within the bound by then.
+    /// Recursion (at most 31 deep: `check_tree` bounds the levels by 30) costs less than
+    /// an explicit stack here: no far cell is stored that the bound later prunes.
+    fn descend(&mut self, s: usize, level: u32, off: [f32; 3]) {
+        if level >= self.levels {
             self.leaf(s - (1 << self.levels));
+            return;
+        }
+        let dim = (level % 3) as usize;
+        let delta = self.c[dim] - self.stems[s];
+        let right = usize::from(delta >= 0.0);
+        let near = 2 * s + right;
+        // Eytzinger order puts the children of `near` at `2 near`, `2 near + 1` and its 16
+        // descendants four levels down at `16 near..16 near + 16` (one cache line of
+        // stems): ask for both now, as kiddo's own descent does, so that the loads of the
+        // levels below overlap this one's (at 10M points this took the walk from 1.3× to
+        // 1.0× kiddo's `nearest_one`). Small trees sit in cache, where the hints would
+        // only cost instructions.
+        if self.levels >= PREFETCH_MIN_LEVELS {
+            let stems = self.stems.as_ptr();
+            super::prefetch(stems.wrapping_add(near.wrapping_mul(2)));
+            super::prefetch(stems.wrapping_add(near.wrapping_mul(16)));
+        }
+        self.descend(near, level + 1, off);
+        let mut far_off = off;
+        far_off[dim] = delta.abs();
+        if super::live::cell_distance_squared(&far_off) <= self.bound {
+            self.descend(near ^ 1, level + 1, far_off);
         }
     }
 
@@ -243,6 +248,10 @@ impl SpatialIndex for KdIndex {
         self.ids.get(item as usize).copied()
     }
 
+    fn prefetch_node(&self, item: u32) {
+        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
+    }
+
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
         self.index().nearest_visit(c, f);
     }
@@ -288,6 +297,10 @@ impl SpatialIndex for ArchivedIndex<'_> {
 
     fn node_of(&self, item: u32) -> Option<NodeId> {
         self.ids.get(item as usize).map(|&id| NodeId(id))
+    }
+
+    fn prefetch_node(&self, item: u32) {
+        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {

@@ -128,6 +128,17 @@ pub struct LiveKdTree {
     /// making them deeper; the whole tree is rebuilt when it halves).
     peak: usize,
     path: Vec<u32>,
+    /// Changes whenever a node is allocated, freed or relinked: a [`Located`] found
+    /// under one `shape` stays exact while `shape` does.
+    shape: u64,
+}
+
+/// Where a point descends to in a [`LiveKdTree`]: the head of its leaf chain and the
+/// depth of that leaf. Exact only while the tree's `shape` is unchanged.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Located {
+    leaf: u32,
+    depth: u32,
 }
 
 impl Default for LiveKdTree {
@@ -141,6 +152,7 @@ impl Default for LiveKdTree {
             len: 0,
             peak: 0,
             path: Vec::new(),
+            shape: 0,
         }
     }
 }
@@ -221,6 +233,7 @@ impl LiveKdTree {
     // ---- allocation -------------------------------------------------------------------
 
     fn alloc_leaf(&mut self) -> u32 {
+        self.shape = self.shape.wrapping_add(1);
         if self.free_leaves != NONE {
             let i = self.free_leaves;
             let l = &mut self.leaves[i as usize];
@@ -235,6 +248,7 @@ impl LiveKdTree {
     }
 
     fn free_leaf(&mut self, i: u32) {
+        self.shape = self.shape.wrapping_add(1);
         let l = &mut self.leaves[i as usize];
         l.len = 0;
         l.next = self.free_leaves;
@@ -242,6 +256,7 @@ impl LiveKdTree {
     }
 
     fn alloc_inner(&mut self, n: Inner) -> u32 {
+        self.shape = self.shape.wrapping_add(1);
         if let Some(i) = self.free_inners.pop() {
             self.inners[i as usize] = n;
             i
@@ -368,6 +383,7 @@ impl LiveKdTree {
 
     /// Points the reference to `old` held by `parent` (or the root) at `new`.
     fn replace_child(&mut self, parent: Option<u32>, old: u32, new: u32) {
+        self.shape = self.shape.wrapping_add(1);
         match parent {
             None => self.root = new,
             Some(p) => {
@@ -383,6 +399,117 @@ impl LiveKdTree {
     }
 
     // ---- updates ------------------------------------------------------------------------
+
+    /// The current shape (see [`Located`]).
+    pub(crate) fn shape(&self) -> u64 {
+        self.shape
+    }
+
+    /// Finds, for every point of `points` in every tree of `trees`, where it descends
+    /// to, and writes it to `out` (trees outer, points inner; `out` must have room):
+    /// [`LiveKdTree::insert_located`] and [`LiveKdTree::remove_located`] then skip
+    /// their own descent. Brings each leaf into cache as well. Changes nothing.
+    ///
+    /// The descents advance in lockstep, one level each per round, so their cache
+    /// misses overlap instead of following one another: a move (a remove and an insert)
+    /// in two indexes walks its four paths in about the time of one.
+    pub(crate) fn locate(trees: &[&LiveKdTree], points: &[&[Point]], out: &mut [Located]) {
+        const WIDTH: usize = 8;
+        let Some(&first) = trees.first() else { return };
+        let mut batch = [(first, LEAF_BIT, [0.0f32; 3]); WIDTH];
+        let mut k = 0;
+        let mut done = 0;
+        for &t in trees {
+            for p in points.iter().flat_map(|ps| ps.iter()) {
+                batch[k] = (t, t.root, *p);
+                k += 1;
+                if k == WIDTH {
+                    Self::locate_batch(&mut batch, &mut out[done..done + k]);
+                    done += k;
+                    k = 0;
+                }
+            }
+        }
+        Self::locate_batch(&mut batch[..k], &mut out[done..done + k]);
+    }
+
+    fn locate_batch(batch: &mut [(&LiveKdTree, u32, Point)], out: &mut [Located]) {
+        out.fill(Located::default());
+        let mut depth = 0;
+        loop {
+            let mut descending = false;
+            for ((t, c, p), o) in batch.iter_mut().zip(out.iter_mut()) {
+                if !is_leaf(*c) {
+                    let n = &t.inners[*c as usize];
+                    *c = if p[n.dim as usize] < n.split {
+                        n.left
+                    } else {
+                        n.right
+                    };
+                    descending = true;
+                    o.depth = depth + 1;
+                }
+            }
+            if !descending {
+                break;
+            }
+            depth += 1;
+        }
+        // One read per cache line of each leaf (independent reads, so they overlap
+        // too); `black_box` keeps them.
+        let mut sum = 0u32;
+        for ((t, c, _), o) in batch.iter().zip(out.iter_mut()) {
+            o.leaf = *c;
+            let leaf = &t.leaves[leaf_index(*c)];
+            sum = sum.wrapping_add(leaf.len);
+            for i in (0..LEAF_CAP).step_by(8) {
+                sum = sum
+                    .wrapping_add(leaf.xs[i].to_bits())
+                    .wrapping_add(leaf.ys[i].to_bits())
+                    .wrapping_add(leaf.zs[i].to_bits())
+                    .wrapping_add(leaf.items[i]);
+            }
+        }
+        std::hint::black_box(sum);
+    }
+
+    /// [`LiveKdTree::insert`], given where `p` descends to (found by
+    /// [`LiveKdTree::locate`] under the current shape): a leaf with room takes the entry
+    /// without a descent; anything else (a full or chained leaf, a leaf too deep, a
+    /// stale `at`) takes the ordinary path.
+    pub(crate) fn insert_located(&mut self, p: Point, item: u32, at: Located, shape: u64) {
+        let head = leaf_index(at.leaf);
+        let leaf = &self.leaves[head];
+        if shape == self.shape
+            && leaf.next == NONE
+            && (leaf.len as usize) < LEAF_CAP
+            && at.depth as usize <= depth_limit(self.len + 1)
+        {
+            self.leaves[head].push(Entry { p, item });
+            self.len += 1;
+            self.peak = self.peak.max(self.len);
+        } else {
+            self.insert(p, item);
+        }
+    }
+
+    /// [`LiveKdTree::remove`], given where `p` descends to (see
+    /// [`LiveKdTree::insert_located`]): found in a single leaf that keeps other entries,
+    /// the entry goes without a descent; anything else takes the ordinary path.
+    pub(crate) fn remove_located(&mut self, p: Point, item: u32, at: Located, shape: u64) -> bool {
+        let head = leaf_index(at.leaf);
+        let leaf = &self.leaves[head];
+        if shape == self.shape && leaf.next == NONE && leaf.len > 1 {
+            if !self.chain_remove(head as u32, &p, item) {
+                return false; // `p` descends to this leaf: nowhere else can hold it
+            }
+            self.len -= 1;
+            self.shrink_if_halved();
+            true
+        } else {
+            self.remove(p, item)
+        }
+    }
 
     /// Adds one entry.
     pub fn insert(&mut self, p: Point, item: u32) {
@@ -497,15 +624,20 @@ impl LiveKdTree {
                 self.free_leaf(head);
                 self.free_inners.push(parent);
             }
-            if self.len > 2 * LEAF_CAP && 2 * self.len < self.peak {
-                let mut entries = self.entries();
-                self.free_subtree(self.root);
-                self.root = self.build(&mut entries);
-                self.peak = self.len;
-            }
+            self.shrink_if_halved();
         }
         self.path = path;
         found
+    }
+
+    /// Rebuilds the whole tree once it holds half the entries it had at its peak.
+    fn shrink_if_halved(&mut self) {
+        if self.len > 2 * LEAF_CAP && 2 * self.len < self.peak {
+            let mut entries = self.entries();
+            self.free_subtree(self.root);
+            self.root = self.build(&mut entries);
+            self.peak = self.len;
+        }
     }
 
     /// Removes one `(p, item)` entry from a chain, keeping chained leaves packed.
@@ -675,10 +807,27 @@ impl LiveKdTree {
         } else {
             (n.right, n.left)
         };
-        self.within_in(near, c, off, r2, f);
         let mut far_off = off;
         far_off[dim] = delta.abs();
-        if cell_distance_squared(&far_off) <= r2 {
+        let visit_far = cell_distance_squared(&far_off) <= r2;
+        if visit_far {
+            // The far side is walked after the near one: start loading its first node
+            // (a whole leaf: 9 cache lines) now, so that the load overlaps that walk.
+            if is_leaf(far) {
+                let p = self
+                    .leaves
+                    .as_ptr()
+                    .wrapping_add(leaf_index(far))
+                    .cast::<u8>();
+                for line in 0..std::mem::size_of::<Leaf>().div_ceil(64) {
+                    super::prefetch(p.wrapping_add(64 * line));
+                }
+            } else {
+                super::prefetch(self.inners.as_ptr().wrapping_add(far as usize));
+            }
+        }
+        self.within_in(near, c, off, r2, f);
+        if visit_far {
             self.within_in(far, c, far_off, r2, f);
         }
     }
@@ -903,6 +1052,94 @@ mod tests {
         }
         t.check().unwrap();
         assert!(t.depth() <= depth_limit(t.len()), "depth {}", t.depth());
+    }
+
+    #[test]
+    fn located_updates_match_plain_ones() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let empty = LiveKdTree::new();
+        let point = |rng: &mut rand_chacha::ChaCha8Rng| {
+            [
+                rng.gen_range(0..60) as f32 * 0.25,
+                rng.gen_range(0..60) as f32 * 0.25,
+                rng.gen_range(0..2) as f32,
+            ]
+        };
+        let entries: Vec<Entry> = (0..3000)
+            .map(|i| Entry {
+                p: point(&mut rng),
+                item: i,
+            })
+            .collect();
+        let mut t = LiveKdTree::from_entries(entries.clone());
+        let mut plain = t.clone();
+        let mut model = entries;
+        for step in 0..6000 {
+            // Move (remove one entry, add up to three) through located updates; the same
+            // through plain ones.
+            let e = model.swap_remove(rng.gen_range(0..model.len()));
+            let added: Vec<Entry> = (0..rng.gen_range(0..4))
+                .map(|_| Entry {
+                    p: if rng.gen_bool(0.1) {
+                        e.p
+                    } else {
+                        point(&mut rng)
+                    },
+                    item: e.item,
+                })
+                .collect();
+            let ps: Vec<Point> = added.iter().map(|a| a.p).collect();
+            let mut at = [Located::default(); 8];
+            LiveKdTree::locate(&[&t, &empty], &[&[e.p], &ps], &mut at[..2 * (1 + ps.len())]);
+            let shape = t.shape();
+            assert!(t.remove_located(e.p, e.item, at[0], shape));
+            assert!(plain.remove(e.p, e.item));
+            for (a, l) in added.iter().zip(&at[1..]) {
+                t.insert_located(a.p, a.item, *l, shape);
+                plain.insert(a.p, a.item);
+            }
+            model.extend(added);
+            if step % 500 == 0 {
+                t.check().unwrap();
+                let sorted = |t: &LiveKdTree| {
+                    let mut v: Vec<_> = t
+                        .entries()
+                        .iter()
+                        .map(|e| (e.item, e.p.map(f32::to_bits)))
+                        .collect();
+                    v.sort_unstable();
+                    v
+                };
+                assert_eq!(sorted(&t), sorted(&plain));
+                assert_eq!(t.len(), model.len());
+            }
+        }
+        // A located leaf is the one a descent reaches, at the path's depth.
+        let probe: Vec<Point> = (0..50).map(|_| point(&mut rng)).collect();
+        let mut at = vec![Located::default(); 50];
+        LiveKdTree::locate(&[&t], &[&probe], &mut at);
+        for (p, a) in probe.iter().zip(&at) {
+            let (mut r, mut depth) = (t.root, 0);
+            while !is_leaf(r) {
+                let n = &t.inners[r as usize];
+                r = if p[n.dim as usize] < n.split {
+                    n.left
+                } else {
+                    n.right
+                };
+                depth += 1;
+            }
+            assert_eq!((a.leaf, a.depth), (r, depth));
+        }
+        // A stale location (the shape changed since) takes the ordinary path.
+        let old_shape = t.shape();
+        for i in 0..200 {
+            t.insert(point(&mut rng), 10_000 + i);
+        }
+        assert_ne!(t.shape(), old_shape);
+        t.insert_located([1.0, 1.0, 0.0], 99_999, at[0], old_shape);
+        assert!(t.remove_located([1.0, 1.0, 0.0], 99_999, at[1], old_shape));
+        t.check().unwrap();
     }
 
     #[test]

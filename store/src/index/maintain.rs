@@ -14,8 +14,9 @@
 //! A node index changes when any node below its root changes, so the hooks touch the
 //! root's layer: a node index is republished with its root's layer.
 
+use super::live::Located;
 use super::overlay::OverlaidTree;
-use super::{LiveIndex, build_tree};
+use super::{LiveIndex, LiveKdTree, build_tree};
 use crate::error::{EditResult, GraphEditError};
 use crate::graph::{Change, Node};
 use crate::snapshot::{LayerSegment, NodeIndexSegment};
@@ -25,6 +26,16 @@ use std::collections::BTreeMap;
 
 /// `Node::index_handle` of a node without a handle.
 const NO_HANDLE: u32 = u32::MAX;
+/// An update that walks between 2 and this many tree paths locates them first, all at
+/// once (see [`LiveKdTree::locate`]), if its trees hold at least
+/// [`WARM_MIN_ENTRIES`] entries together. Larger updates are bulk edits that gain
+/// little; smaller trees mostly sit in cache, where a separate walk only adds work
+/// (measured on a move, walking alone: +30% in one 10k-point index, −5 to −12% in one
+/// 1M-point index, −19 to −29% in two; the located inserts and removes that skip their
+/// own descent took another 13% and 19% off at 1M points).
+const WARM_LIMIT: usize = 32;
+/// See [`WARM_LIMIT`]: about what fits in a 1 MiB L2 cache, twice over.
+const WARM_MIN_ENTRIES: usize = 1 << 17;
 
 /// The live indexes of a graph and the node handles their items use.
 #[derive(Clone, Debug, Default)]
@@ -51,12 +62,23 @@ impl LiveIndexes {
                 h
             }
             None => {
+                if self.ids.len() == self.ids.capacity() {
+                    // Grow by an eighth rather than double: the table costs 8 bytes per
+                    // indexed node, and doubling would leave up to as much again unused.
+                    self.ids.reserve_exact(self.ids.len() / 8 + 8);
+                }
                 self.ids.push(node.id);
                 u32::try_from(self.ids.len() - 1).expect("fewer than 2^32 indexed nodes")
             }
         };
         node.index_handle = h;
         h
+    }
+
+    /// Makes room for `n` more handles at once (exactly, so that enabling an index
+    /// over many nodes leaves no slack in the table).
+    fn reserve_handles(&mut self, n: usize) {
+        self.ids.reserve_exact(n.saturating_sub(self.free.len()));
     }
 
     fn release(&mut self, node: &Node) {
@@ -101,6 +123,15 @@ impl SceneGraph {
         if self.indexes.layers.contains_key(&layer) {
             return Ok(());
         }
+        let unhandled = l
+            .nodes
+            .iter()
+            .filter(|id| {
+                let n = &self.nodes[id];
+                !n.points.is_empty() && n.index_handle == NO_HANDLE
+            })
+            .count();
+        self.indexes.reserve_handles(unhandled);
         let mut entries = Vec::new();
         for id in &l.nodes {
             let node = self.nodes.get_mut(id).expect("listed");
@@ -118,6 +149,15 @@ impl SceneGraph {
             .insert(layer, OverlaidTree::from_entries(entries));
         self.touch_layer(layer, Change::All);
         Ok(())
+    }
+
+    /// Bytes held by the handle table of the live indexes: the map from the items
+    /// their kd-trees store (`u32` handles) to node ids, one entry per node that has
+    /// had points in an enabled index, shared by all live indexes of the graph. Not
+    /// included in [`crate::index::SpatialIndex::memory_bytes`] of a live index.
+    pub fn index_handle_bytes(&self) -> usize {
+        self.indexes.ids.capacity() * std::mem::size_of::<NodeId>()
+            + self.indexes.free.capacity() * std::mem::size_of::<u32>()
     }
 
     /// Disables the layer index of `layer` (nothing happens if it is not enabled).
@@ -151,8 +191,14 @@ impl SceneGraph {
         if self.indexes.nodes.contains_key(&node) {
             return Ok(());
         }
+        let members = self.indexed_members(node);
+        let unhandled = members
+            .iter()
+            .filter(|(id, _)| self.nodes[id].index_handle == NO_HANDLE)
+            .count();
+        self.indexes.reserve_handles(unhandled);
         let mut entries = Vec::new();
-        for (id, points) in self.indexed_members(node) {
+        for (id, points) in members {
             let h = self
                 .indexes
                 .handle(self.nodes.get_mut(&id).expect("member"));
@@ -230,12 +276,36 @@ impl SceneGraph {
             .indexes
             .handle(self.nodes.get_mut(&id).expect("changed node"));
         let new = &self.nodes[&id].points;
+        let (removed, added) = crate::id::changed_points(old, new);
+        let per_tree = removed.len() + added.len();
+        let paths = per_tree * (roots.len() + usize::from(has_layer));
+        let mut located = [Located::default(); WARM_LIMIT];
+        let mut is_located = false;
+        if (2..=WARM_LIMIT).contains(&paths) {
+            let trees: Vec<&LiveKdTree> = self
+                .indexes
+                .layers
+                .get(&layer)
+                .map(OverlaidTree::tree)
+                .into_iter()
+                .chain(roots.iter().map(|r| self.indexes.nodes[r].tree()))
+                .collect();
+            if trees.iter().map(|t| t.len()).sum::<usize>() >= WARM_MIN_ENTRIES {
+                LiveKdTree::locate(&trees, &[removed, added], &mut located[..paths]);
+                is_located = true;
+            }
+        }
+        // Tree `k` (the layer index first, then the node indexes of `roots`, as located).
+        let located_in = |k: usize| is_located.then(|| &located[k * per_tree..(k + 1) * per_tree]);
+        let mut k = 0;
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
-            t.apply(h, old, new);
+            t.apply(h, old, new, located_in(k));
+            k += 1;
         }
         for &r in &roots {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
-            t.apply(h, old, new);
+            t.apply(h, old, new, located_in(k));
+            k += 1;
         }
         for r in roots {
             let rl = self.nodes[&r].layer;
@@ -272,9 +342,9 @@ impl SceneGraph {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
             for (h, points) in &moved {
                 if added {
-                    t.apply(*h, &[], points);
+                    t.apply(*h, &[], points, None);
                 } else {
-                    t.apply(*h, points, &[]);
+                    t.apply(*h, points, &[], None);
                 }
             }
             let rl = self.nodes[&r].layer;
@@ -291,7 +361,7 @@ impl SceneGraph {
         if node.index_handle != NO_HANDLE
             && let Some(t) = self.indexes.layers.get_mut(&node.layer)
         {
-            t.apply(node.index_handle, &node.points, &[]);
+            t.apply(node.index_handle, &node.points, &[], None);
         }
         self.indexes.release(node);
     }

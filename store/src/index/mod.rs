@@ -21,7 +21,9 @@
 //! # Memory
 //! An index stores each point's coordinates (12 bytes) and item (4 bytes). Measured
 //! totals per point: 16.5–16.8 bytes archived (kiddo's leaves, extents and stems), about
-//! 19.5 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
+//! 19.2 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
+//! The live indexes of a graph share one handle table besides (item to node id: 8 bytes
+//! per indexed node, grown by an eighth; [`crate::SceneGraph::index_handle_bytes`]).
 
 mod kdtree;
 mod live;
@@ -55,6 +57,12 @@ pub trait SpatialIndex {
     /// The node an item belongs to (`None` only for an item no point carries).
     fn node_of(&self, item: u32) -> Option<NodeId>;
 
+    /// A hint that [`SpatialIndex::node_of`] will soon be asked about `item`: starts
+    /// loading its entry of the id table into the cache, so that the (in a large index,
+    /// cold) loads of many items overlap the search that finds them. Changes no result;
+    /// the default does nothing.
+    fn prefetch_node(&self, _item: u32) {}
+
     /// Branch-and-bound search from `c`, nearer cells first: calls `f(distance², item)`
     /// for every point whose squared distance is at most the current bound, and skips
     /// every cell whose points are all strictly farther than it. `f` returns the new bound
@@ -67,6 +75,22 @@ pub trait SpatialIndex {
 
     /// Bytes of memory (or of archive) the index occupies.
     fn memory_bytes(&self) -> usize;
+}
+
+/// Starts loading the cache line holding `p` into the cache (a hint: `p` may be any
+/// address, even a dangling or wild one).
+#[inline]
+pub(crate) fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code, reason = "a prefetch hint")]
+    // SAFETY: `_mm_prefetch` only hints the cache hierarchy: it never faults, whatever
+    // the address, and changes no memory the program can observe. It needs SSE, which
+    // every x86_64 CPU has (part of the target's baseline features).
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// The live graph's index over one layer or one sub-tree, as [`SceneView::layer_index`]
@@ -97,6 +121,10 @@ impl SpatialIndex for LiveIndex<'_> {
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
         self.tree.nearest_visit(c, f);
+    }
+
+    fn prefetch_node(&self, item: u32) {
+        prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, mut f: F) {

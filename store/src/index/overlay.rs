@@ -25,7 +25,7 @@
 //! [`crate::distance_squared`] to any point in the box, evaluated in the same order)
 //! exceeds the bound.
 
-use super::live::{Entry, LiveKdTree};
+use super::live::{Entry, LiveKdTree, Located};
 use crate::{Aabb, Point, distance_squared};
 
 /// Changed points (removed plus added, after trimming the common prefix and suffix) from
@@ -96,8 +96,22 @@ impl OverlaidTree {
         self.moved.binary_search_by_key(&item, |m| m.item).is_ok()
     }
 
+    /// The kd-tree under the overlay.
+    pub(crate) fn tree(&self) -> &LiveKdTree {
+        &self.tree
+    }
+
     /// The live points of `item` change from `old` (exactly its live points) to `new`.
-    pub(crate) fn apply(&mut self, item: u32, old: &[Point], new: &[Point]) {
+    /// `located` (if given) holds where each changed point descends to in the tree,
+    /// removed ones first, as [`LiveKdTree::locate`] found them under its current shape;
+    /// it is used when the change goes to the tree point by point.
+    pub(crate) fn apply(
+        &mut self,
+        item: u32,
+        old: &[Point],
+        new: &[Point],
+        located: Option<&[Located]>,
+    ) {
         match self.moved.binary_search_by_key(&item, |m| m.item) {
             Ok(at) => {
                 let m = &mut self.moved[at];
@@ -123,12 +137,20 @@ impl OverlaidTree {
             Err(at) => {
                 let (removed, added) = crate::id::changed_points(old, new);
                 if removed.len() + added.len() < MOVE_MIN || old.is_empty() || new.is_empty() {
-                    for p in removed {
-                        let found = self.tree.remove(*p, item);
+                    let shape = self.tree.shape();
+                    let at = |i: usize| located.and_then(|l| l.get(i)).copied();
+                    for (i, p) in removed.iter().enumerate() {
+                        let found = match at(i) {
+                            Some(a) => self.tree.remove_located(*p, item, a, shape),
+                            None => self.tree.remove(*p, item),
+                        };
                         debug_assert!(found, "indexed point {p:?} missing");
                     }
-                    for p in added {
-                        self.tree.insert(*p, item);
+                    for (i, p) in added.iter().enumerate() {
+                        match at(removed.len() + i) {
+                            Some(a) => self.tree.insert_located(*p, item, a, shape),
+                            None => self.tree.insert(*p, item),
+                        }
                     }
                     return;
                 }
@@ -408,7 +430,7 @@ mod tests {
                 }
             };
             let before = t.moved.len();
-            t.apply(i as u32, &old, &new);
+            t.apply(i as u32, &old, &new, None);
             overlaid += usize::from(t.moved.len() > before);
             merged += usize::from(t.moved.len() < before && t.moved.is_empty() && before > 1);
             model[i] = new;
@@ -436,7 +458,7 @@ mod tests {
                 .iter()
                 .map(|p| [p[0] + k as f32, p[1], p[2]])
                 .collect();
-            t.apply(3, &cur, &next);
+            t.apply(3, &cur, &next, None);
             cur = next;
             // The tree still holds the original entries, all dead; the overlay the rest.
             assert_eq!(t.tree.len(), 190);
@@ -444,12 +466,12 @@ mod tests {
         }
         t.check().unwrap();
         // Back home: live again, nothing in the overlay.
-        t.apply(3, &cur, &points);
+        t.apply(3, &cur, &points, None);
         assert!(t.moved.is_empty());
         assert_eq!(t.len(), 190);
         // Gone: the dead entries are purged, so the item may be reused.
-        t.apply(3, &points, &cur);
-        t.apply(3, &cur, &[]);
+        t.apply(3, &points, &cur, None);
+        t.apply(3, &cur, &[], None);
         assert_eq!((t.len(), t.tree.len()), (0, 0));
         t.check().unwrap();
     }

@@ -193,8 +193,12 @@ pub fn visible<V: SceneView>(
         };
         if let Some(index) = view.node_index(id).filter(worth_it) {
             let mut items = Vec::new();
+            let prefetch = super::spatial::prefetches_ids(&index);
             index.points_within(&centre, ball2, |_, item, p| {
                 if cone.contains(p) {
+                    if prefetch {
+                        index.prefetch_node(item);
+                    }
                     items.push(item);
                 }
             });
