@@ -64,38 +64,26 @@ impl Scene {
         })
     }
 
+    /// Every file of this scene's prefix in /dev/shm and iceoryx2's folder.
+    fn files(&self) -> Vec<PathBuf> {
+        let mut found = Vec::new();
+        for dir in [SHM_DIR, ICEORYX2_DIR] {
+            collect(Path::new(dir), &|n| n.starts_with(&self.prefix), &mut found);
+        }
+        found
+    }
+
     /// Files of this scene's prefix, except iceoryx2's per-prefix `*.global_mgmt` counter
     /// (kept by iceoryx2 by design).
     fn leftovers(&self) -> Vec<PathBuf> {
-        let mut found = Vec::new();
-        collect(
-            Path::new(SHM_DIR),
-            &|n| n.starts_with(&self.prefix),
-            &mut found,
-        );
-        collect(
-            Path::new(ICEORYX2_DIR),
-            &|n| n.starts_with(&self.prefix),
-            &mut found,
-        );
+        let mut found = self.files();
         found.retain(|p| !p.to_string_lossy().ends_with(".global_mgmt"));
         found
     }
 
     /// Removes every file of this prefix (once every process of the scene has exited).
     fn remove_files(&self) {
-        let mut found = Vec::new();
-        collect(
-            Path::new(SHM_DIR),
-            &|n| n.starts_with(&self.prefix),
-            &mut found,
-        );
-        collect(
-            Path::new(ICEORYX2_DIR),
-            &|n| n.starts_with(&self.prefix),
-            &mut found,
-        );
-        for path in found {
+        for path in self.files() {
             let _ = std::fs::remove_file(path);
         }
     }
