@@ -8,7 +8,9 @@ use ygg_store::query::{nearest_nodes, nodes_with_label};
 use ygg_store::{SceneView, Scope};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut reader = SceneReader::attach("example")?;
+    let mut reader = SceneReader::builder("example")
+        .wait_for_writer(Duration::from_secs(10))
+        .open()?;
     for _ in 0..50 {
         // Blocks on the writer's event (no polling); None after the timeout.
         let Some(snapshot) = reader.wait_next(Duration::from_secs(2))? else {

@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     g.enable_layer_index(objects)?; // readers query the writer's kd-tree zero-copy
 
-    let mut writer = SceneWriter::create("example", g)?;
+    let mut writer = SceneWriter::builder("example").create(g)?;
     writer.publish()?;
     println!("serving scene 'example'; Ctrl-C to stop");
     for tick in 0u64.. {

@@ -131,11 +131,11 @@ fn tempfile_dir() -> std::path::PathBuf {
 /// The writer's per-layer publish work and the reader's per-layer validation, on the
 /// office's places layer (1,130 nodes with edges and nesting).
 fn segments(c: &mut Criterion) {
-    let dsg = ygg_store::dsg::office::generate(ygg_store::dsg::office::OfficeParams {
+    let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
         seed: 7,
         scale: 1.0,
     });
-    let g = ygg_store::layout::build(&dsg, ygg_store::layout::Layout::Mint).unwrap();
+    let g = ygg_dsg::layout::build(&dsg, ygg_dsg::layout::Layout::Mint).unwrap();
     let mut group = c.benchmark_group("segment");
     for name in ["PLACES", "AGENTS"] {
         let layer = g.layer_id(name).unwrap();

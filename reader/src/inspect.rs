@@ -12,10 +12,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use ygg_store::dsg::{self, NodeSymbol};
+use ygg_dsg::NodeSymbol;
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::objects::Objects;
 use ygg_store::index::SpatialIndex;
-use ygg_store::layout::{self, Layout};
-use ygg_store::objects::Objects;
 use ygg_store::{LayerId, NodeId, SceneView, SnapshotFile};
 
 use crate::query_cli::{live_snapshot, seconds};
@@ -368,7 +368,7 @@ fn layouts_table(path: &Path, layouts: &[Layout]) -> Result<(), String> {
         layouts.to_vec()
     };
     let t = Instant::now();
-    let d = dsg::read_file(path).map_err(|e| e.to_string())?;
+    let d = ygg_dsg::read_file(path).map_err(|e| e.to_string())?;
     let imported = t.elapsed();
     let c = d.counts();
     println!(

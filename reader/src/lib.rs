@@ -1,31 +1,22 @@
-//! Yggdrasil reader: attaches to a scene published through iceoryx2 shared memory and hands
-//! out consistent snapshots of its per-layer byte segments, zero-copy.
+//! Yggdrasil reader: attach to a scene published through shared memory and query its
+//! snapshots in place, zero-copy.
 //!
-//! * See [`ReaderBuilder`] to open a [`SegmentSubscriber`], then
-//!   [`SegmentSubscriber::wait_next`] / [`SegmentSubscriber::latest`] for [`Snapshot`]s.
-//! * [`protocol`] is the wire format shared with the writer crate.
-//!
-//! The transport treats segment bytes as opaque; validating the archives inside is the
-//! caller's job (shared memory is untrusted input). The transport itself checks every header
-//! and manifest prefix and reports [`ReceiveError::Corrupt`] instead of reading out of bounds.
+//! * See [`SceneReader`] (from [`SceneReader::builder`]):
+//!   [`SceneReader::wait_next`] / [`SceneReader::latest`] hand out [`SceneSnapshot`]s whose
+//!   [`SceneSnapshot::view`] every query of [`ygg_store::query`] runs on.
+//! * The transport underneath is [`ygg_transport`]; each received segment is validated once
+//!   against the archived layout of [`ygg_store::snapshot`] before any query touches it.
 #![warn(missing_docs)]
 
-mod error;
-pub mod limits;
-pub mod protocol;
-mod segment;
-mod snapshot;
-mod subscriber;
-pub mod test_pattern;
+mod scene;
 
 #[doc(inline)]
-pub use error::{ReaderOpenError, ReceiveError};
+pub use scene::{SceneReader, SceneReaderBuilder, SceneReceiveError, SceneSnapshot};
 #[doc(inline)]
-pub use protocol::ManifestEntry;
-#[doc(inline)]
-pub use snapshot::Snapshot;
-#[doc(inline)]
-pub use subscriber::{ReaderBuilder, SegmentSubscriber, WriterStatus};
-mod scene;
-#[doc(inline)]
-pub use scene::{SceneReader, SceneReceiveError, SceneSnapshot};
+pub use ygg_transport::{ReaderOpenError, ReceiveError, WriterStatus};
+
+// The transport starts every payload at `SEGMENT_ALIGN`; archives need `ARCHIVE_ALIGN`.
+const _: () = assert!(
+    ygg_transport::protocol::SEGMENT_ALIGN.is_multiple_of(ygg_store::snapshot::ARCHIVE_ALIGN),
+    "the transport's payload alignment must satisfy the archived layout's"
+);

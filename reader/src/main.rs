@@ -9,8 +9,8 @@ use std::time::{Duration, Instant};
 mod roles;
 
 use clap::{Parser, Subcommand};
-use ygg_reader::{
-    ReaderBuilder, ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, test_pattern,
+use ygg_transport::{
+    ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, test_pattern,
 };
 
 #[derive(Parser, Debug)]
@@ -77,12 +77,10 @@ const EXIT_CORRUPT: u8 = 3;
 const EXIT_TIMEOUT: u8 = 4;
 
 fn main() -> ExitCode {
-    // iceoryx2 logs warnings (for example "no config file") on stderr; keep them for
-    // IOX2_LOG_LEVEL=warn and show errors only by default.
-    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
+    ygg_transport::init_iceoryx_logging();
     let cli = Cli::parse();
     // Each layer costs about six descriptors; do not stop at a soft limit of 1024.
-    let _ = ygg_reader::limits::raise_open_file_limit();
+    let _ = ygg_transport::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
@@ -119,20 +117,12 @@ fn seconds(value: f64, flag: &str) -> Result<Duration, String> {
         .map_err(|_| format!("{flag} must be a non-negative number of seconds"))
 }
 
-/// Opens the reader, retrying while the scene does not exist yet, for up to `wait`.
+/// Opens the reader, waiting up to `wait` for the scene to exist.
 fn open(scene: &str, wait: Duration) -> Result<SegmentSubscriber, ReaderOpenError> {
-    let start = Instant::now();
-    loop {
-        match ReaderBuilder::new(scene)
-            .handle_termination_signals(true)
-            .open()
-        {
-            Err(ReaderOpenError::NoWriter { .. }) if start.elapsed() < wait => {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            result => return result,
-        }
-    }
+    SubscriberBuilder::new(scene)
+        .handle_termination_signals(true)
+        .wait_for_writer(wait)
+        .open()
 }
 
 /// One line describing a snapshot, with the synthetic-content check.

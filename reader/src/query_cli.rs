@@ -1,5 +1,5 @@
 //! `ygg-reader query`: answers a stream of JSON-line object queries (the contract of
-//! [`ygg_store::objects`]) on a `.ygg` snapshot or on a live scene.
+//! [`ygg_dsg::objects`]) on a `.ygg` snapshot or on a live scene.
 //!
 //! One JSON line out per line in, in order:
 //!
@@ -18,8 +18,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use ygg_reader::{ReaderOpenError, SceneReader, SceneSnapshot};
-use ygg_store::objects::{ObjectQuery, Objects};
+use ygg_dsg::objects::{ObjectQuery, Objects};
+use ygg_reader::{SceneReader, SceneSnapshot};
 use ygg_store::{SceneView, SnapshotFile};
 
 /// Arguments of `ygg-reader query`.
@@ -179,15 +179,10 @@ pub fn seconds(value: f64, flag: &str) -> Result<Duration, String> {
 /// `timeout`, or a snapshot that failed validation.
 pub fn live_snapshot(scene: &str, timeout: Duration) -> Result<SceneSnapshot, String> {
     let start = Instant::now();
-    let mut reader = loop {
-        match SceneReader::attach(scene) {
-            Ok(r) => break r,
-            Err(ReaderOpenError::NoWriter { .. }) if start.elapsed() < timeout => {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            Err(e) => return Err(format!("scene {scene}: {e}")),
-        }
-    };
+    let mut reader = SceneReader::builder(scene)
+        .wait_for_writer(timeout)
+        .open()
+        .map_err(|e| format!("scene {scene}: {e}"))?;
     if let Some(s) = reader.latest().map_err(|e| format!("scene {scene}: {e}"))? {
         return Ok(s);
     }

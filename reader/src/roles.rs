@@ -4,10 +4,11 @@
 //! progress and summary lines.
 
 use std::time::{Duration, Instant};
-use ygg_reader::{ReaderBuilder, SceneReader, SceneSnapshot};
+use ygg_dsg::layout;
+use ygg_reader::{SceneReader, SceneSnapshot};
 use ygg_store::query::{self, ConeView};
 use ygg_store::snapshot::ArchivedScene;
-use ygg_store::{NodeId, Point, SceneView, Scope, layout};
+use ygg_store::{NodeId, Point, SceneView, Scope};
 
 /// Which consumer to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -60,8 +61,8 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
                     .as_ref()
                     .is_none_or(|c| c.generation() != s.generation());
                 if fresh {
-                    let published = s.view().published_unix_ns();
-                    let now = ygg_store_unix_ns();
+                    let published = s.raw().published_unix_ns();
+                    let now = ygg_transport::protocol::unix_ns();
                     if published > 0 && now >= published {
                         visible_ns.push((now - published) as f64);
                     }
@@ -183,26 +184,11 @@ impl Checker {
     }
 }
 
-fn ygg_store_unix_ns() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as u64)
-}
-
 fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, Box<dyn std::error::Error>> {
-    let until = Instant::now() + Duration::from_secs_f64(wait_secs.max(0.0));
-    loop {
-        match ReaderBuilder::new(scene)
-            .handle_termination_signals(true)
-            .open()
-        {
-            Ok(s) => return Ok(SceneReader::with_subscriber(s)),
-            Err(ygg_reader::ReaderOpenError::NoWriter { .. }) if Instant::now() < until => {
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            Err(e) => return Err(e.into()),
-        }
-    }
+    Ok(SceneReader::builder(scene)
+        .handle_termination_signals(true)
+        .wait_for_writer(Duration::from_secs_f64(wait_secs.max(0.0)))
+        .open()?)
 }
 
 fn percentiles(v: &mut [f64]) -> (f64, f64) {

@@ -14,15 +14,15 @@
     reason = "re-deriving archives from bytes validated by this module"
 )]
 
-use crate::{
-    ReaderBuilder, ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, WriterStatus,
-};
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
     ArchivedScene, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,
+};
+use ygg_transport::{
+    ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
 };
 
 /// Why no snapshot could be delivered.
@@ -92,22 +92,62 @@ pub struct SceneReader {
     validations: u64,
 }
 
-impl SceneReader {
-    /// Attaches to `scene` with default settings.
-    ///
-    /// # Errors
-    /// As [`ReaderBuilder::open`]: an invalid name, or no writer serving the scene.
-    pub fn attach(scene: &str) -> Result<Self, ReaderOpenError> {
-        Ok(Self::with_subscriber(ReaderBuilder::new(scene).open()?))
+/// Configures and opens a [`SceneReader`]; see [`SceneReader::builder`].
+#[derive(Debug, Clone)]
+pub struct SceneReaderBuilder {
+    subscriber: SubscriberBuilder,
+}
+
+impl SceneReaderBuilder {
+    /// How long [`SceneReaderBuilder::open`] waits for a writer to create the scene (default
+    /// zero: fail at once with [`ReaderOpenError::NoWriter`]).
+    pub fn wait_for_writer(mut self, value: Duration) -> Self {
+        self.subscriber = self.subscriber.wait_for_writer(value);
+        self
     }
 
-    /// Wraps an already opened subscriber (for custom [`ReaderBuilder`] settings).
-    pub fn with_subscriber(subscriber: SegmentSubscriber) -> Self {
-        SceneReader {
-            subscriber,
+    /// The iceoryx2 file-name prefix; overrides
+    /// [`ygg_transport::protocol::ENV_IOX2_PREFIX`]. Must match the writer's.
+    pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
+        self.subscriber = self.subscriber.iceoryx_prefix(prefix);
+        self
+    }
+
+    /// How often a waiting reader checks that the writer process is alive (default 200 ms).
+    pub fn liveness_interval(mut self, value: Duration) -> Self {
+        self.subscriber = self.subscriber.liveness_interval(value);
+        self
+    }
+
+    /// If true, SIGINT/SIGTERM make [`SceneReader::wait_next`] return
+    /// [`ReceiveError::Terminated`] so the process can exit cleanly. Off by default: a
+    /// library should not take over an application's signals.
+    pub fn handle_termination_signals(mut self, value: bool) -> Self {
+        self.subscriber = self.subscriber.handle_termination_signals(value);
+        self
+    }
+
+    /// Attaches to the scene; the first [`SceneReader::wait_next`] returns the current
+    /// snapshot within milliseconds.
+    ///
+    /// # Errors
+    /// As [`SubscriberBuilder::open`]: an invalid name, or no writer serving the scene
+    /// within the wait.
+    pub fn open(self) -> Result<SceneReader, ReaderOpenError> {
+        Ok(SceneReader {
+            subscriber: self.subscriber.open()?,
             validated: HashMap::new(),
             current: None,
             validations: 0,
+        })
+    }
+}
+
+impl SceneReader {
+    /// A builder for a reader of `scene`, with default settings.
+    pub fn builder(scene: &str) -> SceneReaderBuilder {
+        SceneReaderBuilder {
+            subscriber: SubscriberBuilder::new(scene),
         }
     }
 

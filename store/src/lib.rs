@@ -6,22 +6,18 @@
 //! * See [`query`] for the queries, written once over [`SceneView`].
 //! * See [`index`] for the spatial indexes (live, archived, reader-built) behind the
 //!   spatial queries.
-//! * See [`objects`] for the object-level queries of the command line's query contract.
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file.
 
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
 mod bbox;
-pub mod dsg;
 mod error;
 mod feature;
 mod graph;
 mod id;
 pub mod index;
-pub mod layout;
 mod live_view;
-pub mod objects;
 pub mod query;
 mod segment_cache;
 pub mod snapshot;

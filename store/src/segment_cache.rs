@@ -16,7 +16,7 @@
 //!
 //! Either way the segment holds the same rows as a fresh one; only the order of its
 //! string table may differ, and strings no longer used stay until the next full build
-//! (one is forced once the table doubled). `store/tests/segment_cache.rs` checks this
+//! (one is forced once the table doubled). `store/tests/graph_props.rs` and `dsg/tests/segment_cache_office.rs` check this
 //! against fresh builds under random mutations.
 
 use crate::graph::{Change, SceneGraph};
@@ -141,13 +141,13 @@ impl std::fmt::Debug for CachedManifest {
 }
 
 impl SceneGraph {
-    /// The manifest [`SceneGraph::manifest`] builds, stamped `published_unix_ns`, kept
+    /// The manifest [`SceneGraph::manifest`] builds, kept
     /// for next time: while no layer, layer edge or graph-level label/key entry was
     /// added or removed, only the per-layer generations, node counts and id bounds are
     /// brought up to date. This is what a publishing writer calls.
-    pub fn cached_manifest(&mut self, generation: u64, published_unix_ns: u64) -> &Manifest {
+    pub fn cached_manifest(&mut self, generation: u64) -> &Manifest {
         let key = (self.structure_generation, self.terms_generation);
-        let mut manifest = match self.manifest_cache.0.take() {
+        let manifest = match self.manifest_cache.0.take() {
             Some((s, t, mut m)) if (s, t) == key => {
                 for (entry, l) in m.layers.iter_mut().zip(self.layers.values()) {
                     entry.generation = l.generation;
@@ -159,7 +159,6 @@ impl SceneGraph {
             }
             _ => self.manifest(generation),
         };
-        manifest.published_unix_ns = published_unix_ns;
         &self.manifest_cache.0.insert((key.0, key.1, manifest)).2
     }
 

@@ -39,13 +39,15 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
-/// Alignment of every segment (kd-tree leaves in archived indexes need 128 bytes).
-pub const SEGMENT_ALIGN: usize = 128;
+/// Alignment an archived segment needs to be accessed in place (kd-tree leaves in archived
+/// indexes need 128 bytes). Whatever carries segments (a `.ygg` file, the shared-memory
+/// transport) must start each one at a multiple of it.
+pub const ARCHIVE_ALIGN: usize = 128;
 
 /// Bytes aligned for archived segments.
-pub type SegmentBytes = rkyv::util::AlignedVec<SEGMENT_ALIGN>;
+pub type SegmentBytes = rkyv::util::AlignedVec<ARCHIVE_ALIGN>;
 
 /// Marks "no parent" in the parent column.
 const NO_PARENT: u64 = u64::MAX;
@@ -159,10 +161,6 @@ pub struct Manifest {
     pub version: u32,
     /// Generation of the whole cut (increases with every publish).
     pub generation: u64,
-    /// When the writer began publishing this cut: nanoseconds since the Unix epoch (0
-    /// for a file). Readers on the same host subtract it from their clock to measure
-    /// publish-to-visible latency.
-    pub published_unix_ns: u64,
     /// Layers, ascending by id.
     pub layers: Vec<ManifestLayer>,
     /// Label -> layers holding it, ascending.
@@ -372,7 +370,6 @@ impl SceneGraph {
         Manifest {
             version: FORMAT_VERSION,
             generation,
-            published_unix_ns: 0,
             layers,
             label_layers: graph_index(&self.label_layers),
             key_layers: graph_index(&self.key_layers),
@@ -511,7 +508,7 @@ in_place_archiving!(Manifest);
 pub const FILE_MAGIC: &[u8; 8] = b"YGGSNAP\0";
 
 fn align_up(n: usize) -> usize {
-    n.div_ceil(SEGMENT_ALIGN) * SEGMENT_ALIGN
+    n.div_ceil(ARCHIVE_ALIGN) * ARCHIVE_ALIGN
 }
 
 /// Lays segments out as a `.ygg` file: magic, version, count, `(offset, len)` table,
@@ -579,9 +576,9 @@ fn unpack_file(bytes: &[u8], what: &str) -> Result<Vec<std::ops::Range<usize>>, 
                 "segment {i} ({off}+{len}) lies outside the file"
             )));
         };
-        if !(off as usize).is_multiple_of(SEGMENT_ALIGN) {
+        if !(off as usize).is_multiple_of(ARCHIVE_ALIGN) {
             return Err(layout(format!(
-                "segment {i} at offset {off} is not {SEGMENT_ALIGN}-byte aligned"
+                "segment {i} at offset {off} is not {ARCHIVE_ALIGN}-byte aligned"
             )));
         }
         ranges.push(off as usize..end as usize);
@@ -1094,11 +1091,6 @@ impl<'a> ArchivedScene<'a> {
     /// The manifest's generation.
     pub fn generation(&self) -> u64 {
         self.manifest.generation.to_native()
-    }
-
-    /// When the cut was published (nanoseconds since the Unix epoch; 0 for files).
-    pub fn published_unix_ns(&self) -> u64 {
-        self.manifest.published_unix_ns.to_native()
     }
 
     /// The generation of each layer in this cut, ascending by layer id.

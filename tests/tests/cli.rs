@@ -8,15 +8,15 @@ use std::process::{Command, Output, Stdio};
 use std::time::Duration;
 
 use serde_json::{Value, json};
-use ygg_store::dsg::{self, DsgGraph, NodeKind};
-use ygg_store::layout::{self, Layout};
-use ygg_store::objects::{ObjectQuery, Objects};
-use ygg_tests::{TestScene, binary};
-use ygg_writer::{SceneWriter, WriterBuilder};
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::objects::{ObjectQuery, Objects};
+use ygg_dsg::{DsgGraph, NodeKind};
+use ygg_testkit::{TestScene, binary};
+use ygg_writer::SceneWriter;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../store/tests/fixtures")
+        .join("../dsg/tests/fixtures")
         .join(name)
 }
 
@@ -176,7 +176,7 @@ fn expected(d: &DsgGraph, queries: &[Value]) -> Vec<Value> {
 fn query_answers_are_identical_for_every_layout() {
     let dir = tempfile::tempdir().expect("tempdir");
     let input = fixture("office_tiny.json");
-    let d = dsg::read_file(&input).expect("fixture");
+    let d = ygg_dsg::read_file(&input).expect("fixture");
     let queries = office_queries(&d, 600);
     let qfile = dir.path().join("q.jsonl");
     write_lines(&qfile, &queries);
@@ -373,7 +373,7 @@ fn live_scene_answers_like_the_file() {
     let scene = TestScene::new("cli-live");
     let dir = tempfile::tempdir().expect("tempdir");
     let input = fixture("office_tiny.json");
-    let d = dsg::read_file(&input).expect("fixture");
+    let d = ygg_dsg::read_file(&input).expect("fixture");
     let queries = office_queries(&d, 200);
     let qfile = dir.path().join("q.jsonl");
     write_lines(&qfile, &queries);
@@ -382,11 +382,10 @@ fn live_scene_answers_like_the_file() {
     let from_file = query_file(&ygg, &qfile);
 
     let graph = layout::build(&d, Layout::Mint).expect("build");
-    let publisher = WriterBuilder::new(&scene.name)
+    let mut writer = SceneWriter::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)
-        .create()
+        .create(graph)
         .expect("writer");
-    let mut writer = SceneWriter::with_publisher(publisher, graph);
     writer.publish().expect("publish");
 
     let q = scene

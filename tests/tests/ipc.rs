@@ -10,15 +10,15 @@ use std::time::{Duration, Instant};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::{NodeBuilder, ServiceName};
 use rustix::process::Signal;
-use ygg_reader::protocol::{
+use ygg_testkit::{TestScene, Watchdog, field};
+use ygg_transport::protocol::{
     self, BLOCK_SIZE, Block128, EVENT_SNAPSHOT_PUBLISHED, Ipc, MANIFEST_LAYER_ID, MANIFEST_MAGIC,
     ManifestEntry, SegmentError, SegmentHeader, SegmentKind,
 };
-use ygg_reader::{
-    ReaderBuilder, ReceiveError, SegmentSubscriber, Snapshot, WriterStatus, test_pattern,
+use ygg_transport::{
+    PublishError, PublisherBuilder, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder,
+    WriterStatus, test_pattern,
 };
-use ygg_tests::{TestScene, Watchdog, field};
-use ygg_writer::{PublishError, WriterBuilder};
 
 /// Generous bound for any single step (debug builds on a busy 2-core machine).
 const STEP: Duration = Duration::from_secs(30);
@@ -26,7 +26,7 @@ const STEP: Duration = Duration::from_secs(30);
 const WATCHDOG: Duration = Duration::from_secs(120);
 
 fn open_reader(scene: &TestScene) -> SegmentSubscriber {
-    ReaderBuilder::new(&scene.name)
+    SubscriberBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .open()
         .expect("open reader")
@@ -286,7 +286,7 @@ fn a_second_writer_on_the_same_scene_fails_clearly() {
     assert!(!stderr.contains("panicked"), "stderr: {stderr}");
 
     // In-process too: the typed error.
-    let err = WriterBuilder::new(&scene.name)
+    let err = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .create()
         .expect_err("second writer");
@@ -332,11 +332,11 @@ fn sigint_and_sigterm_exit_cleanly_and_remove_shared_memory() {
 #[test]
 fn shared_memory_full_is_an_error_before_anything_is_written() {
     let scene = TestScene::new("full");
-    let mut writer = WriterBuilder::new(&scene.name)
+    let mut writer = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .create()
         .expect("writer");
-    let free = ygg_writer::shm::free_bytes(std::path::Path::new(protocol::DEFAULT_SHM_DIR))
+    let free = ygg_transport::shm::free_bytes(std::path::Path::new(protocol::DEFAULT_SHM_DIR))
         .expect("statvfs");
     let too_big = usize::try_from(free).expect("64-bit") + (1 << 30);
     let mut called = false;
@@ -385,7 +385,7 @@ fn err_text<T>(result: &Result<T, PublishError>) -> String {
 #[test]
 fn manifests_must_name_published_generations() {
     let scene = TestScene::new("manifest");
-    let mut writer = WriterBuilder::new(&scene.name)
+    let mut writer = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .create()
         .expect("writer");
@@ -593,7 +593,14 @@ fn garbage_segments_are_reported_not_crashed_on() {
     let fake = FakeWriter::new(&scene);
     let mut reader = open_reader(&scene);
     let manifest = |generation, len| {
-        SegmentHeader::new(SegmentKind::Manifest, MANIFEST_LAYER_ID, 1, generation, len)
+        SegmentHeader::new(
+            SegmentKind::Manifest,
+            MANIFEST_LAYER_ID,
+            1,
+            generation,
+            len,
+            0,
+        )
     };
 
     // A header claiming more bytes than the payload holds.
@@ -675,7 +682,7 @@ fn garbage_segments_are_reported_not_crashed_on() {
     assert!(matches!(&e, ReceiveError::Corrupt { .. }), "{e:?}");
 
     // A layer segment on the wrong service, then one too short for its header.
-    fake.layer(SegmentHeader::new(SegmentKind::Layer, 8, 1, 6, 16), 1);
+    fake.layer(SegmentHeader::new(SegmentKind::Layer, 8, 1, 6, 16, 0), 1);
     fake.manifest(manifest(6, 256), 2, |b| valid_manifest_prefix(b, 6));
     let e = next_error(&mut reader, &fake);
     assert!(
@@ -689,7 +696,7 @@ fn garbage_segments_are_reported_not_crashed_on() {
         "{e:?}"
     );
     fake.layer(
-        SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 1 << 40),
+        SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 1 << 40, 0),
         1,
     );
     let e = next_error(&mut reader, &fake);
@@ -707,7 +714,7 @@ fn garbage_segments_are_reported_not_crashed_on() {
 
     // A good layer completes the pending manifest: the reader recovered.
     fake.layer(
-        SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 200),
+        SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 200, 0),
         2,
     );
     let snapshot = pumped_snapshot(&mut reader, &fake);
@@ -748,7 +755,7 @@ fn a_writer_that_exits_cleanly_is_reported_gone_at_once() {
     let dog = Watchdog::new(WATCHDOG);
     let mut writer = scene.spawn_writer(&["--layers", "2", "--rate", "20"], &dog);
     writer.expect_line(STEP, |l| l.starts_with("published"));
-    let mut reader = ReaderBuilder::new(&scene.name)
+    let mut reader = SubscriberBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         // A killed writer would take this long to notice; a clean exit is announced.
         .liveness_interval(Duration::from_secs(3600))
@@ -775,7 +782,7 @@ fn a_writer_that_exits_cleanly_is_reported_gone_at_once() {
 #[test]
 fn readers_beyond_max_readers_get_a_clear_error() {
     let scene = TestScene::new("crowd");
-    let mut writer = WriterBuilder::new(&scene.name)
+    let mut writer = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .max_readers(1)
         .create()
@@ -795,7 +802,7 @@ fn readers_beyond_max_readers_get_a_clear_error() {
         )
         .expect("manifest");
     let first = open_reader(&scene);
-    let err = ReaderBuilder::new(&scene.name)
+    let err = SubscriberBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .open()
         .expect_err("second reader must not fit");
@@ -811,7 +818,7 @@ fn readers_beyond_max_readers_get_a_clear_error() {
 #[test]
 fn layers_grow_retire_and_stay_128_byte_aligned() {
     let scene = TestScene::new("grow");
-    let mut writer = WriterBuilder::new(&scene.name)
+    let mut writer = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .initial_segment_bytes(1024)
         .create()
@@ -874,7 +881,7 @@ fn layers_grow_retire_and_stay_128_byte_aligned() {
 /// Publishes generation 1 (layer 1 only) so that a reader can open the scene.
 fn scene_reader_ready<'a>(
     scene: &'a TestScene,
-    writer: &mut ygg_writer::SegmentPublisher,
+    writer: &mut ygg_transport::SegmentPublisher,
 ) -> &'a TestScene {
     writer
         .publish_layer(1, 1, 16, |b| test_pattern::write(b, 1, 1))

@@ -6,30 +6,22 @@
 use std::time::{Duration, Instant};
 
 use rustix::process::Signal;
-use ygg_reader::{ReaderBuilder, SceneReader, SceneReceiveError, SceneSnapshot};
+use ygg_dsg::layout;
+use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
-use ygg_store::{SceneView, Scope, layout};
-use ygg_tests::{Proc, TestScene, Watchdog};
-use ygg_writer::WriterBuilder;
+use ygg_store::{SceneView, Scope};
+use ygg_testkit::{Proc, TestScene, Watchdog};
+use ygg_transport::PublisherBuilder;
 
 const STEP: Duration = Duration::from_secs(60);
 const WATCHDOG: Duration = Duration::from_secs(180);
 
 fn attach(scene: &TestScene) -> SceneReader {
-    let until = Instant::now() + STEP;
-    loop {
-        match ReaderBuilder::new(&scene.name)
-            .iceoryx_prefix(&scene.prefix)
-            .open()
-        {
-            Ok(s) => return SceneReader::with_subscriber(s),
-            Err(e) if Instant::now() < until => {
-                let _ = e;
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            Err(e) => panic!("attach: {e}"),
-        }
-    }
+    SceneReader::builder(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .wait_for_writer(STEP)
+        .open()
+        .unwrap_or_else(|e| panic!("attach: {e}"))
 }
 
 fn snapshot_after(reader: &mut SceneReader, generation: u64) -> SceneSnapshot {
@@ -142,7 +134,7 @@ fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
 #[test]
 fn corrupted_archive_bytes_are_refused_by_the_reader() {
     let scene = TestScene::new("corrupt");
-    let mut publisher = WriterBuilder::new(&scene.name)
+    let mut publisher = PublisherBuilder::new(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .create()
         .expect("writer");
@@ -166,7 +158,7 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
         )
         .expect("publish layer");
     let manifest = g.manifest(1);
-    let entries = [ygg_reader::ManifestEntry {
+    let entries = [ygg_transport::ManifestEntry {
         layer_id: rooms.0,
         generation: g.layer_generation(rooms).expect("gen"),
     }];

@@ -12,8 +12,8 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use ygg_store::dsg::{self, ImportPhase, ImportProgress};
-use ygg_store::layout::{self, Layout};
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::{ImportPhase, ImportProgress};
 use ygg_store::{SceneGraph, SceneView};
 
 /// Arguments of `ygg-writer import`.
@@ -55,7 +55,7 @@ pub fn run(args: &ImportArgs) -> Result<(), String> {
     let mut timings = Timings::default();
     let mut phase_start = Instant::now();
     let mut phase = None;
-    let dsg = dsg::read_file_with_progress(&args.input, &mut |p: ImportProgress| {
+    let dsg = ygg_dsg::read_file_with_progress(&args.input, &mut |p: ImportProgress| {
         if phase != Some(p.phase) {
             let now = Instant::now();
             if phase == Some(ImportPhase::Decompress) || phase == Some(ImportPhase::Read) {

@@ -1,29 +1,22 @@
-//! Yggdrasil writer: publishes a scene as per-layer byte segments through iceoryx2 shared
-//! memory.
+//! Yggdrasil writer: a live scene graph published through shared memory.
 //!
-//! * See [`WriterBuilder`] to create a [`SegmentPublisher`] for a scene, and
-//!   [`SegmentPublisher::publish_layer`] / [`SegmentPublisher::publish_manifest`] for the
-//!   consistent-cut protocol of DESIGN.md §5.
-//! * The wire format is [`ygg_reader::protocol`]; the transport treats segment bytes as opaque.
-//!
-//! Publishing never blocks on readers (safe overflow, bounded borrows), checks the free space
-//! of `/dev/shm` before writing ([`PublishError::SharedMemoryFull`]), and a writer restarted
-//! after a crash takes over the scene's services ([`WriterCreateError::AlreadyRunning`] only
-//! while the previous writer lives).
+//! * See [`SceneWriter`] (from [`SceneWriter::builder`]): it owns a
+//!   [`ygg_store::SceneGraph`] and, on [`SceneWriter::publish`], archives each changed layer
+//!   straight into shared memory, then a manifest that names the new consistent cut.
+//! * The transport underneath is [`ygg_transport`]: wire format, iceoryx2 services and the
+//!   segment publisher. The writer shares with readers only the archived layout
+//!   ([`ygg_store::snapshot`]) and that wire format.
 #![warn(missing_docs)]
 
-mod error;
-mod loan;
-mod publisher;
-pub mod shm;
+mod scene;
 
 #[doc(inline)]
-pub use error::{PublishError, WriterCreateError, WriterWaitError};
+pub use scene::{PublishReport, SceneWriter, SceneWriterBuilder};
 #[doc(inline)]
-pub use publisher::{DEFAULT_INITIAL_SEGMENT_BYTES, SegmentPublisher, WriterBuilder};
-#[doc(inline)]
-pub use ygg_reader::protocol::ManifestEntry;
-mod scene;
-#[doc(inline)]
-pub use scene::{PublishReport, SceneWriter, unix_ns};
-pub mod replay;
+pub use ygg_transport::{PublishError, WriterCreateError, WriterWaitError};
+
+// The transport starts every payload at `SEGMENT_ALIGN`; archives need `ARCHIVE_ALIGN`.
+const _: () = assert!(
+    ygg_transport::protocol::SEGMENT_ALIGN.is_multiple_of(ygg_store::snapshot::ARCHIVE_ALIGN),
+    "the transport's payload alignment must satisfy the archived layout's"
+);

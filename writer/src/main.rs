@@ -10,9 +10,9 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand};
-use ygg_reader::protocol::ManifestEntry;
-use ygg_reader::test_pattern;
-use ygg_writer::{SegmentPublisher, WriterBuilder};
+use ygg_transport::protocol::ManifestEntry;
+use ygg_transport::test_pattern;
+use ygg_transport::{PublisherBuilder, SegmentPublisher};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -57,7 +57,7 @@ struct Serve {
     scale: f64,
     /// Layout of the built-in office (vanilla, chocolate, mint, saffron).
     #[arg(long, default_value = "mint")]
-    layout: ygg_store::layout::Layout,
+    layout: ygg_dsg::layout::Layout,
     /// Update ticks per second (agent poses, object moves, mesh growth); 0 serves the
     /// scene unchanged.
     #[arg(long, default_value_t = 30.0)]
@@ -66,7 +66,7 @@ struct Serve {
     #[arg(long)]
     seconds: Option<f64>,
     /// Readers the scene supports at once.
-    #[arg(long, default_value_t = ygg_reader::protocol::DEFAULT_MAX_READERS)]
+    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
 }
 
@@ -91,7 +91,7 @@ struct ServeTest {
     #[arg(long)]
     linger: bool,
     /// Readers the scene supports at once.
-    #[arg(long, default_value_t = ygg_reader::protocol::DEFAULT_MAX_READERS)]
+    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
     /// Print only errors and the final line.
     #[arg(long)]
@@ -99,12 +99,10 @@ struct ServeTest {
 }
 
 fn main() -> ExitCode {
-    // iceoryx2 logs warnings (for example "no config file") on stderr; keep them for
-    // IOX2_LOG_LEVEL=warn and show errors only by default.
-    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
+    ygg_transport::init_iceoryx_logging();
     let cli = Cli::parse();
     // Each layer costs about six descriptors; do not stop at a soft limit of 1024.
-    let _ = ygg_reader::limits::raise_open_file_limit();
+    let _ = ygg_transport::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
         Command::Serve(args) => serve(&args),
@@ -145,7 +143,7 @@ fn serve_test(args: &ServeTest) -> Result<(), Box<dyn std::error::Error>> {
     } else {
         Duration::from_millis(100)
     };
-    let mut writer = WriterBuilder::new(&args.scene)
+    let mut writer = PublisherBuilder::new(&args.scene)
         .max_readers(args.max_readers)
         .initial_segment_bytes(args.bytes)
         .create()?;
@@ -212,9 +210,9 @@ fn publish_test_layer(
 
 fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
     use std::time::Instant;
+    use ygg_dsg::replay::SlamReplay;
     use ygg_store::{SceneView, SnapshotFile};
     use ygg_writer::SceneWriter;
-    use ygg_writer::replay::SlamReplay;
     if !(args.rate.is_finite() && args.rate >= 0.0) {
         return Err("--rate must be a non-negative number".into());
     }
@@ -237,18 +235,17 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
             ygg_store::query::subgraph(&view, &all)
         }
         None => {
-            let dsg = ygg_store::dsg::office::generate(ygg_store::dsg::office::OfficeParams {
+            let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
                 seed: 7,
                 scale: args.scale,
             });
-            ygg_store::layout::build(&dsg, args.layout)?
+            ygg_dsg::layout::build(&dsg, args.layout)?
         }
     };
     let loaded = t.elapsed();
-    let publisher = WriterBuilder::new(&args.scene)
+    let mut writer = SceneWriter::builder(&args.scene)
         .max_readers(args.max_readers)
-        .create()?;
-    let mut writer = SceneWriter::with_publisher(publisher, graph);
+        .create(graph)?;
     let mut replay = SlamReplay::new(writer.graph(), 7);
     let first = writer.publish()?;
     println!(

@@ -1,11 +1,12 @@
 //! [`SceneWriter`]: a live [`SceneGraph`] published through shared memory, one segment
 //! per changed layer plus a manifest.
 
-use crate::{PublishError, SegmentPublisher, WriterBuilder, WriterCreateError};
 use std::collections::BTreeSet;
-use std::time::SystemTime;
-use ygg_reader::protocol::ManifestEntry;
+use std::path::PathBuf;
+use std::time::Duration;
 use ygg_store::{SceneGraph, SceneView};
+use ygg_transport::ManifestEntry;
+use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
 
 /// What one [`SceneWriter::publish`] sent.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -28,7 +29,7 @@ pub struct PublishReport {
 /// # use ygg_writer::SceneWriter;
 /// # use ygg_store::{SceneGraph, NodeId};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-/// let mut writer = SceneWriter::create("office", SceneGraph::new())?;
+/// let mut writer = SceneWriter::builder("office").max_readers(8).create(SceneGraph::new())?;
 /// let rooms = writer.graph_mut().add_layer("rooms")?;
 /// writer.graph_mut().add_node(NodeId(1), rooms)?;
 /// writer.publish()?; // readers now see the room
@@ -41,26 +42,69 @@ pub struct SceneWriter {
     generation: u64,
 }
 
-impl SceneWriter {
-    /// Creates the scene's services with default settings and takes ownership of `graph`
-    /// (nothing is published until [`SceneWriter::publish`]).
-    ///
-    /// # Errors
-    /// As [`WriterBuilder::create`]: an invalid name, or a live writer on this scene.
-    pub fn create(scene: &str, graph: SceneGraph) -> Result<Self, WriterCreateError> {
-        Ok(Self::with_publisher(
-            WriterBuilder::new(scene).create()?,
-            graph,
-        ))
+/// Configures and creates a [`SceneWriter`]; see [`SceneWriter::builder`].
+#[derive(Debug, Clone)]
+pub struct SceneWriterBuilder {
+    publisher: PublisherBuilder,
+}
+
+impl SceneWriterBuilder {
+    /// Most readers attached at once (default
+    /// [`ygg_transport::protocol::DEFAULT_MAX_READERS`]). Each costs shared memory for the
+    /// samples it may hold.
+    pub fn max_readers(mut self, value: usize) -> Self {
+        self.publisher = self.publisher.max_readers(value);
+        self
     }
 
-    /// Wraps an already created publisher (for custom [`WriterBuilder`] settings).
-    pub fn with_publisher(publisher: SegmentPublisher, graph: SceneGraph) -> Self {
-        SceneWriter {
+    /// Initial capacity of a layer's shared-memory segment; iceoryx2 grows it in
+    /// power-of-two steps (default [`ygg_transport::DEFAULT_INITIAL_SEGMENT_BYTES`]).
+    pub fn initial_segment_bytes(mut self, value: usize) -> Self {
+        self.publisher = self.publisher.initial_segment_bytes(value);
+        self
+    }
+
+    /// The shared-memory file system checked for free space before each write (default
+    /// `/dev/shm`).
+    pub fn shm_dir(mut self, path: impl Into<PathBuf>) -> Self {
+        self.publisher = self.publisher.shm_dir(path);
+        self
+    }
+
+    /// The iceoryx2 file-name prefix; overrides
+    /// [`ygg_transport::protocol::ENV_IOX2_PREFIX`]. Readers must use the same one.
+    pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
+        self.publisher = self.publisher.iceoryx_prefix(prefix);
+        self
+    }
+
+    /// How often the writer's helper thread checks readers for liveness (default 200 ms).
+    pub fn liveness_interval(mut self, value: Duration) -> Self {
+        self.publisher = self.publisher.liveness_interval(value);
+        self
+    }
+
+    /// Creates the scene's services and takes ownership of `graph` (nothing is published
+    /// until [`SceneWriter::publish`]).
+    ///
+    /// # Errors
+    /// As [`PublisherBuilder::create`]: an invalid name, or a live writer on this scene.
+    pub fn create(self, graph: SceneGraph) -> Result<SceneWriter, WriterCreateError> {
+        Ok(SceneWriter {
             graph,
-            publisher,
+            publisher: self.publisher.create()?,
             published_layers: BTreeSet::new(),
             generation: 0,
+        })
+    }
+}
+
+impl SceneWriter {
+    /// A builder for the writer of `scene` (ASCII letters, digits, `-`, `_`, `.`; at most
+    /// [`ygg_transport::protocol::MAX_SCENE_NAME_LEN`] bytes), with default settings.
+    pub fn builder(scene: &str) -> SceneWriterBuilder {
+        SceneWriterBuilder {
+            publisher: PublisherBuilder::new(scene),
         }
     }
 
@@ -95,7 +139,7 @@ impl SceneWriter {
     /// lacks room, and the other transport errors. On error the previous snapshot stays
     /// the current one for readers.
     pub fn publish(&mut self) -> Result<PublishReport, PublishError> {
-        let started_unix_ns = unix_ns();
+        self.publisher.start_cut();
         let mut report = PublishReport::default();
         let mut entries = Vec::new();
         let layers: Vec<_> = self.graph.layers().collect();
@@ -124,7 +168,7 @@ impl SceneWriter {
         }
         self.published_layers = live;
         let generation = self.generation + 1;
-        let manifest = self.graph.cached_manifest(generation, started_unix_ns);
+        let manifest = self.graph.cached_manifest(generation);
         let len = manifest.archived_len();
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {
@@ -135,11 +179,4 @@ impl SceneWriter {
         report.bytes_sent += len;
         Ok(report)
     }
-}
-
-/// Nanoseconds since the Unix epoch (0 if the clock is before it).
-pub fn unix_ns() -> u64 {
-    SystemTime::now()
-        .duration_since(SystemTime::UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos() as u64)
 }

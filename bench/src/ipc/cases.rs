@@ -7,10 +7,10 @@ use super::socket::{PlainGraph, SocketServer};
 use super::{IpcArgs, Res, check_interrupted, install_signal_handler, unix_ns};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
-use ygg_store::dsg::DsgGraph;
-use ygg_store::layout::Layout;
+use ygg_dsg::DsgGraph;
+use ygg_dsg::layout::Layout;
 use ygg_store::{SceneGraph, SceneView};
-use ygg_writer::{SceneWriter, WriterBuilder};
+use ygg_writer::SceneWriter;
 
 /// Groups of cases (`--only`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,7 +153,7 @@ impl Ctx {
 /// Runs the benchmark and writes its reports.
 pub fn run(args: &IpcArgs) -> Res<()> {
     install_signal_handler();
-    let _ = ygg_reader::limits::raise_open_file_limit();
+    let _ = ygg_transport::limits::raise_open_file_limit();
     let stale = remove_stale();
     if stale > 0 {
         eprintln!("removed {stale} files left by earlier, killed runs");
@@ -296,12 +296,11 @@ pub(crate) fn writer(
     max_readers: usize,
     segment_bytes: usize,
 ) -> Res<SceneWriter> {
-    let publisher = WriterBuilder::new(&scene.name)
+    let mut w = SceneWriter::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .max_readers(max_readers)
         .initial_segment_bytes(segment_bytes)
-        .create()?;
-    let mut w = SceneWriter::with_publisher(publisher, graph);
+        .create(graph)?;
     w.publish()?;
     Ok(w)
 }

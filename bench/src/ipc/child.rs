@@ -162,7 +162,7 @@ impl ReaderProc {
             .arg(&scene.prefix)
             .args(["--parent", &std::process::id().to_string()])
             .args(args)
-            .env(ygg_reader::protocol::ENV_IOX2_PREFIX, &scene.prefix)
+            .env(ygg_transport::protocol::ENV_IOX2_PREFIX, &scene.prefix)
             .env_remove("IOX2_LOG_LEVEL")
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())

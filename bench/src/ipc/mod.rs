@@ -112,6 +112,4 @@ pub(crate) fn check_interrupted() -> Res<()> {
 }
 
 /// Nanoseconds since the Unix epoch: the clock shared by the writer and its readers.
-pub(crate) fn unix_ns() -> u64 {
-    ygg_writer::unix_ns()
-}
+pub(crate) use ygg_transport::protocol::unix_ns;

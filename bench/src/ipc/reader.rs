@@ -28,8 +28,8 @@ use std::io::{BufRead, Read, Write};
 use std::path::PathBuf;
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
 use std::time::{Duration, Instant};
-use ygg_reader::{ReaderBuilder, ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
-use ygg_store::layout::Layout;
+use ygg_dsg::layout::Layout;
+use ygg_reader::{ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::nearest_nodes;
 use ygg_store::{ArchivedScene, NodeId, Point, SceneView, Scope};
 
@@ -101,7 +101,7 @@ pub fn main(args: &ReaderArgs) -> Res<()> {
     if rustix::process::getppid().map(|p| p.as_raw_pid() as u32) != Some(args.parent) {
         return Err("the benchmark exited before this reader started".into());
     }
-    let _ = ygg_reader::limits::raise_open_file_limit();
+    let _ = ygg_transport::limits::raise_open_file_limit();
     let commands = read_commands();
     match args.mode {
         Mode::Latency => latency(args, &commands),
@@ -132,11 +132,10 @@ fn read_commands() -> Receiver<Cmd> {
 }
 
 fn attach(args: &ReaderArgs) -> Res<(SceneReader, SceneSnapshot)> {
-    let subscriber = ReaderBuilder::new(&args.scene)
+    let mut reader = SceneReader::builder(&args.scene)
         .iceoryx_prefix(&args.prefix)
         .handle_termination_signals(true)
         .open()?;
-    let mut reader = SceneReader::with_subscriber(subscriber);
     let deadline = Instant::now() + Duration::from_secs(30);
     while Instant::now() < deadline {
         if let Some(snapshot) = reader.wait_next(Duration::from_millis(100))? {

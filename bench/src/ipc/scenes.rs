@@ -1,9 +1,9 @@
 //! The graphs the benchmark publishes and the mutations it applies between publishes.
 
 use super::Res;
-use ygg_store::dsg::DsgGraph;
-use ygg_store::dsg::office::{OfficeParams, generate};
-use ygg_store::layout::{self, Layout};
+use ygg_dsg::DsgGraph;
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::office::{OfficeParams, generate};
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView};
 
 /// The built-in office at `scale` (seed 7), as imported Spark-DSG data.

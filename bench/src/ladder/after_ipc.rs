@@ -26,8 +26,8 @@ use crate::ipc::{Res, check_interrupted, install_signal_handler, unix_ns};
 use std::fmt;
 use std::str::FromStr;
 use std::time::{Duration, Instant};
-use ygg_store::dsg::DsgGraph;
-use ygg_store::layout::Layout;
+use ygg_dsg::DsgGraph;
+use ygg_dsg::layout::Layout;
 use ygg_store::{NodeId, Point, SceneGraph, SceneView};
 
 /// First word of a reader's answer line.

@@ -6,7 +6,7 @@
 use super::Answer;
 use super::workload::Query;
 use super::ygg::cone_view;
-use ygg_store::dsg::{DsgGraph, NodeKind};
+use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::query::within_radius;
 use ygg_store::{Point, distance_squared};
 

@@ -6,7 +6,7 @@ use super::harness::Target;
 use super::workload::Query;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rustc_hash::FxHashMap;
-use ygg_store::dsg::{DsgGraph, NodeKind};
+use ygg_dsg::{DsgGraph, NodeKind};
 
 /// Per room: the tree and the owner object of each point.
 pub struct KiddoFloor {

@@ -18,8 +18,8 @@ use report::{Report, StaticRow};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use workload::Workload;
-use ygg_store::dsg::{self, DsgGraph, NodeKind};
-use ygg_store::layout::{self, Layout};
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::{NodeId, SceneGraph, SceneView};
 
 /// Options of `ygg-bench ladder`.
@@ -60,14 +60,14 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     let t = Instant::now();
     let (dsg, input) = match &args.dsg {
-        Some(path) => (dsg::read_file(path)?, path.display().to_string()),
+        Some(path) => (ygg_dsg::read_file(path)?, path.display().to_string()),
         None => {
-            let p = dsg::office::OfficeParams {
+            let p = ygg_dsg::office::OfficeParams {
                 seed: 7,
                 scale: args.scale,
             };
             (
-                dsg::office::generate(p),
+                ygg_dsg::office::generate(p),
                 format!("built-in office (seed 7, scale {})", args.scale),
             )
         }
@@ -346,7 +346,7 @@ fn spark_dsg_anchor(
         Some(p) => p.clone(),
         None => {
             let p = dir.join("office.json");
-            dsg::write_json(dsg, &p)?;
+            ygg_dsg::write_json(dsg, &p)?;
             p
         }
     };

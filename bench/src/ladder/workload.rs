@@ -4,8 +4,8 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Value, json};
+use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::Point;
-use ygg_store::dsg::{DsgGraph, NodeKind};
 
 /// Radii of Q1b, metres.
 pub const RADII: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];

@@ -1,7 +1,7 @@
 //! The Yggdrasil rungs: vanilla (brute force over the ported structure, as the paper
 //! runs it) and chocolate, mint, saffron: Q1a is the store's nearest-node query scoped
 //! to the room's claimed-mesh layer; Q1b and Q2 are the object queries of
-//! [`ygg_store::objects`] over the room's objects ([`Objects::in_subtree`]). Mint and
+//! [`ygg_dsg::objects`] over the room's objects ([`Objects::in_subtree`]). Mint and
 //! saffron have live indexes and object boxes, chocolate scans.
 
 use super::Answer;
@@ -10,8 +10,8 @@ use super::workload::Query;
 use rustc_hash::FxHashMap;
 use std::borrow::Cow;
 use std::cell::OnceCell;
-use ygg_store::layout::{self, Layout};
-use ygg_store::objects::Objects;
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::objects::Objects;
 use ygg_store::query::{self, ConeView};
 use ygg_store::{LayerId, NodeId, SceneView, Scope};
 

@@ -227,10 +227,7 @@ pub fn visible<V: SceneView>(
 ///
 /// # Errors
 /// As [`visible`].
-pub(crate) fn index_sees<I: SpatialIndex>(
-    index: &I,
-    cone: &ConeView,
-) -> Result<bool, SpatialQueryError> {
+pub fn index_sees<I: SpatialIndex>(index: &I, cone: &ConeView) -> Result<bool, SpatialQueryError> {
     let cone = cone.checked()?;
     let (centre, ball2) = cone.ball;
     let mut hit = false;

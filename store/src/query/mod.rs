@@ -15,18 +15,16 @@ mod pattern;
 mod spatial;
 mod traverse;
 
-pub(crate) use fov::index_sees;
 #[doc(inline)]
-pub use fov::{ConeView, visible};
+pub use fov::{ConeView, index_sees, visible};
 #[doc(inline)]
 pub use pattern::{
     edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,
 };
-pub(crate) use spatial::radius_bound;
 #[doc(inline)]
 pub use spatial::{
     SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes, nodes_within_radius,
-    within_index, within_radius,
+    radius_bound, within_index, within_radius,
 };
 pub(crate) use traverse::visit_subtree;
 #[doc(inline)]

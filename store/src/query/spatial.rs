@@ -56,7 +56,7 @@ pub fn within_radius(p: &Point, c: &Point, r: f32) -> bool {
 
 /// The largest squared distance `d2` with `d2.sqrt() <= r`, so that [`within_radius`]
 /// is exactly "`distance_squared <= radius_bound(r)`" (`sqrt` is monotone).
-pub(crate) fn radius_bound(r: f32) -> f32 {
+pub fn radius_bound(r: f32) -> f32 {
     let mut x = r * r;
     if !x.is_finite() {
         return f32::MAX;

@@ -1,18 +1,18 @@
-//! The object queries of `ygg_store::objects` equal brute force computed straight from
+//! The object queries of `ygg_dsg::objects` equal brute force computed straight from
 //! the imported Spark-DSG graph (mesh points and `mesh_connections`), on every layout,
 //! live and saved-and-reopened.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use ygg_store::dsg::{self, DsgGraph, NodeKind};
-use ygg_store::layout::{self, Layout};
-use ygg_store::objects::{ObjectQuery, Objects, cone_view};
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::objects::{ObjectQuery, Objects, cone_view};
+use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::query::within_radius;
 use ygg_store::{NodeId, Point, SceneView, SnapshotFile, distance_squared};
 
 fn fixture(name: &str) -> DsgGraph {
     let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
-    dsg::read_file(&path).unwrap()
+    ygg_dsg::read_file(&path).unwrap()
 }
 
 /// Brute force over the imported graph.
@@ -278,7 +278,7 @@ fn office_tiny_answers_equal_brute_force_on_every_layout() {
 
 #[test]
 fn generated_office_answers_equal_brute_force_on_every_layout() {
-    let d = dsg::office::generate(dsg::office::OfficeParams {
+    let d = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
         seed: 3,
         scale: 0.05,
     });

@@ -9,9 +9,9 @@
 
 use core::mem::MaybeUninit;
 
+use crate::protocol::{BLOCK_SIZE, Block128, Ipc, SegmentHeader};
 use iceoryx2::sample_mut::SampleMut;
 use iceoryx2::sample_mut_uninit::SampleMutUninit;
-use ygg_reader::protocol::{BLOCK_SIZE, Block128, Ipc, SegmentHeader};
 
 /// An uninitialised loaned sample of blocks.
 pub type UninitSample = SampleMutUninit<Ipc, [MaybeUninit<Block128>], SegmentHeader>;

@@ -2,9 +2,9 @@
 
 use std::path::PathBuf;
 
-use ygg_reader::protocol::{PrefixError, SceneNameError};
+use crate::protocol::{PrefixError, SceneNameError};
 
-/// Why [`WriterBuilder::create`](crate::WriterBuilder::create) failed.
+/// Why [`PublisherBuilder::create`](crate::PublisherBuilder::create) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum WriterCreateError {
     /// The scene name cannot name services.
@@ -150,4 +150,19 @@ pub enum WriterWaitError {
     /// SIGTERM arrived.
     #[error("termination requested (SIGTERM)")]
     TerminationRequest,
+}
+
+impl From<crate::service::SetupFailure> for WriterCreateError {
+    fn from(f: crate::service::SetupFailure) -> Self {
+        let crate::service::SetupFailure {
+            service,
+            reason,
+            port,
+        } = f;
+        if port {
+            Self::Port { service, reason }
+        } else {
+            Self::Service { service, reason }
+        }
+    }
 }

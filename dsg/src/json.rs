@@ -32,11 +32,11 @@ use super::symbol::{NodeSymbol, looks_like_symbol};
 ///   "nodes":[{"id":5692549928996306947,"layer":2,"partition":0,
 ///             "attributes":{"type":"ObjectNodeAttributes","position":[1,2,3],"name":"desk"}}],
 ///   "edges":[]}"#;
-/// let g = ygg_store::dsg::parse_json(json, "inline.json")?;
+/// let g = ygg_dsg::parse_json(json, "inline.json")?;
 /// assert_eq!(g.nodes[0].id, 5692549928996306947);
 /// assert_eq!(g.nodes[0].symbol().to_string(), "O(3)");
 /// assert_eq!(g.nodes[0].label.as_deref(), Some("desk"));
-/// # Ok::<(), ygg_store::dsg::DsgImportError>(())
+/// # Ok::<(), ygg_dsg::DsgImportError>(())
 /// ```
 pub fn parse_json(bytes: &[u8], source_name: &str) -> Result<DsgGraph, DsgImportError> {
     parse_json_with_progress(bytes, source_name, &mut |_| {})

@@ -8,9 +8,9 @@ mod dsg_export {
 
     use proptest::prelude::*;
     use serde_json::Value;
-    use ygg_store::dsg::office::{OfficeParams, generate};
-    use ygg_store::dsg::{
-        self, DsgAabb, DsgEdge, DsgGraph, DsgImportError, DsgLayer, DsgMesh, DsgNode, DsgVersion,
+    use ygg_dsg::office::{OfficeParams, generate};
+    use ygg_dsg::{
+        DsgAabb, DsgEdge, DsgGraph, DsgImportError, DsgLayer, DsgMesh, DsgNode, DsgVersion,
         LayerKey, NodeKind, NodeSymbol,
     };
 
@@ -21,12 +21,12 @@ mod dsg_export {
     }
 
     fn load(name: &str) -> DsgGraph {
-        dsg::read_file(fixture(name)).unwrap_or_else(|e| panic!("{e}"))
+        ygg_dsg::read_file(fixture(name)).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn reimport(g: &DsgGraph) -> DsgGraph {
-        let bytes = dsg::to_json_bytes(g);
-        dsg::parse_json(&bytes, &g.source).unwrap_or_else(|e| panic!("{e}"))
+        let bytes = ygg_dsg::to_json_bytes(g);
+        ygg_dsg::parse_json(&bytes, &g.source).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn bits3(v: [f32; 3]) -> [u32; 3] {
@@ -167,8 +167,8 @@ mod dsg_export {
         let g = load("office_tiny.json");
         let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
         let path = dir.path().join("out.json");
-        dsg::write_json(&g, &path).unwrap_or_else(|e| panic!("{e}"));
-        let back = dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
+        ygg_dsg::write_json(&g, &path).unwrap_or_else(|e| panic!("{e}"));
+        let back = ygg_dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_same(
             &DsgGraph {
                 source: back.source.clone(),
@@ -178,14 +178,14 @@ mod dsg_export {
         );
         assert_eq!(
             std::fs::read(&path).unwrap_or_else(|e| panic!("{e}")),
-            dsg::to_json_bytes(&back)
+            ygg_dsg::to_json_bytes(&back)
         );
     }
 
     #[test]
     fn write_json_reports_the_file_on_error() {
         let g = DsgGraph::default();
-        let err = dsg::write_json(&g, "/nonexistent-dir/x.json").unwrap_err();
+        let err = ygg_dsg::write_json(&g, "/nonexistent-dir/x.json").unwrap_err();
         assert!(err.to_string().contains("/nonexistent-dir/x.json"), "{err}");
     }
 
@@ -222,7 +222,7 @@ mod dsg_export {
         let reference: Value = serde_json::from_slice(&text).unwrap_or_else(|e| panic!("{e}"));
         let g = load("office_tiny.json");
         let ours: Value =
-            serde_json::from_slice(&dsg::to_json_bytes(&g)).unwrap_or_else(|e| panic!("{e}"));
+            serde_json::from_slice(&ygg_dsg::to_json_bytes(&g)).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(layout(&ours), layout(&reference));
         assert_eq!(ours["SPARK_DSG_header"], reference["SPARK_DSG_header"]);
         assert_eq!(ours["layer_keys"], reference["layer_keys"]);
@@ -351,11 +351,11 @@ mod dsg_export {
             nodes: vec![n],
             ..DsgGraph::default()
         };
-        let bytes = dsg::to_json_bytes(&g);
+        let bytes = ygg_dsg::to_json_bytes(&g);
         let v: Value = serde_json::from_slice(&bytes).unwrap_or_else(|e| panic!("{e}"));
         assert!(v["nodes"][0]["attributes"]["position"][0].is_null());
         assert!(matches!(
-            dsg::parse_json(&bytes, "nan.json"),
+            ygg_dsg::parse_json(&bytes, "nan.json"),
             Err(DsgImportError::NonFinite { .. })
         ));
     }
@@ -422,7 +422,7 @@ mod dsg_export {
         }
     }
 
-    /// Manual check (see the module docs of `ygg_store::dsg`): writes the full office
+    /// Manual check (see the module docs of `ygg_dsg`): writes the full office
     /// to `$YGG_DSG_EXPORT_OUT` (default: `office_export.json` in the temp dir) and prints the
     /// write time. Load it with spark_dsg to check it:
     /// `cargo test --release -p ygg-store --test dsg_export -- --ignored --nocapture`.
@@ -439,11 +439,11 @@ mod dsg_export {
         let mut best = std::time::Duration::MAX;
         for _ in 0..5 {
             let t = std::time::Instant::now();
-            dsg::write_json(&g, &out).unwrap_or_else(|e| panic!("{e}"));
+            ygg_dsg::write_json(&g, &out).unwrap_or_else(|e| panic!("{e}"));
             best = best.min(t.elapsed());
         }
         let t = std::time::Instant::now();
-        let bytes = dsg::to_json_bytes(&g);
+        let bytes = ygg_dsg::to_json_bytes(&g);
         let to_bytes = t.elapsed();
         eprintln!(
             "wrote {} ({} bytes): write_json best of 5 {best:?}, to_json_bytes {to_bytes:?}",

@@ -13,10 +13,10 @@
 //! node ids are ordered like their objects' ids, so "ties go to the smaller node id"
 //! on mesh nodes means "ties go to the smaller object id".
 
-use crate::dsg::{DsgGraph, NodeKind};
-use crate::{FeatureValue, GraphEditError, LayerId, NodeId, Point, SceneGraph, SceneView};
+use crate::{DsgGraph, NodeKind};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
+use ygg_store::{FeatureValue, GraphEditError, LayerId, NodeId, Point, SceneGraph, SceneView};
 
 /// Which of the paper's layouts to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -183,7 +183,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         layers: FxHashMap::default(),
     };
     let index = dsg.node_index();
-    let rooms: Vec<&crate::dsg::DsgNode> = dsg
+    let rooms: Vec<&crate::DsgNode> = dsg
         .nodes
         .iter()
         .filter(|n| n.kind == NodeKind::Room)
@@ -201,7 +201,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         });
         let chosen = inside.or_else(|| {
             rooms.iter().min_by(|a, c| {
-                let d = |r: &crate::dsg::DsgNode| {
+                let d = |r: &crate::DsgNode| {
                     let q = r.position;
                     (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)
                 };
@@ -211,7 +211,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         chosen.map(|r| r.id)
     };
     // The room of every object: its ancestor room, else the room containing it.
-    let room_of_object = |o: &crate::dsg::DsgNode| -> Option<u64> {
+    let room_of_object = |o: &crate::DsgNode| -> Option<u64> {
         let mut cur = o.parent;
         let mut hops = 0;
         while let (Some(p), true) = (cur, hops < 16) {
@@ -230,10 +230,10 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         let name = l.name.clone();
         b.layer(&name)?;
     }
-    let layer_name: FxHashMap<crate::dsg::LayerKey, String> =
+    let layer_name: FxHashMap<crate::LayerKey, String> =
         dsg.layers.iter().map(|l| (l.key, l.name.clone())).collect();
 
-    let mut sorted_objects: Vec<&crate::dsg::DsgNode> = dsg
+    let mut sorted_objects: Vec<&crate::DsgNode> = dsg
         .nodes
         .iter()
         .filter(|n| n.kind == NodeKind::Object)
@@ -301,7 +301,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
     if layout.per_room() {
         let rooms_layer =
             b.g.node(NodeId(rooms[0].id))
-                .map(|n| n.layer)
+                .map(|n| b.g.node_layer(n))
                 .expect("room added");
         for (i, r) in rooms.iter().enumerate() {
             let room = NodeId(r.id);
@@ -331,8 +331,8 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             continue; // nested under its room's claimed node below
         }
         let (Some(pl), Some(cl)) = (
-            b.g.node(NodeId(p)).map(|x| x.layer),
-            b.g.node(NodeId(n.id)).map(|x| x.layer),
+            b.g.node(NodeId(p)).map(|x| b.g.node_layer(x)),
+            b.g.node(NodeId(n.id)).map(|x| b.g.node_layer(x)),
         ) else {
             continue;
         };
@@ -384,7 +384,10 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
                     object_room[&o.id].expect("rooms"),
                 )))?,
             };
-            let object_layer = b.g.node(object).map(|n| n.layer).expect("object added");
+            let object_layer =
+                b.g.node(object)
+                    .map(|n| b.g.node_layer(n))
+                    .expect("object added");
             b.dag(object_layer, layer)?;
             if layout == Layout::Saffron {
                 for (k, p) in points.into_iter().enumerate() {

@@ -2,10 +2,10 @@
 //! appended at the tick rate, objects moving and appearing, the mesh growing room by
 //! room. It drives `ygg-writer serve --rate` and the demo.
 
+use crate::NodeSymbol;
+use crate::layout;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use ygg_store::dsg::NodeSymbol;
-use ygg_store::layout;
 use ygg_store::query::{self, children, nearest_nodes};
 use ygg_store::{EditResult, FeatureValue, LayerId, NodeId, Point, SceneGraph, SceneView, Scope};
 
@@ -23,7 +23,7 @@ pub struct StepReport {
 }
 
 /// A deterministic SLAM-like update stream over a scene built by
-/// [`ygg_store::layout::build`] (any layout; pieces a scene lacks are skipped).
+/// [`crate::layout::build`] (any layout; pieces a scene lacks are skipped).
 pub struct SlamReplay {
     rng: ChaCha8Rng,
     tick: u64,

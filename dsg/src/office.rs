@@ -42,10 +42,10 @@ use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::model::{
+use crate::model::{
     DsgAabb, DsgEdge, DsgGraph, DsgLayer, DsgMesh, DsgNode, DsgVersion, LayerKey, NodeKind,
 };
-use super::symbol::NodeSymbol;
+use crate::symbol::NodeSymbol;
 
 /// Parameters of [`generate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -208,7 +208,7 @@ pub fn label_names() -> Vec<&'static str> {
 ///
 /// # Examples
 /// ```
-/// use ygg_store::dsg::office::{generate, OfficeParams};
+/// use ygg_dsg::office::{generate, OfficeParams};
 /// let g = generate(OfficeParams { seed: 7, scale: 0.02 });
 /// let c = g.counts();
 /// assert_eq!((c.nodes, c.mesh_vertices), (110, 7_098));
@@ -1408,7 +1408,7 @@ mod tests {
         best.map(|(_, i)| i)
     }
 
-    use crate::dsg::ClaimStats;
+    use crate::ClaimStats;
 
     fn prefix_pair(g: &DsgGraph) -> BTreeMap<(u8, u8), usize> {
         let mut m = BTreeMap::new();

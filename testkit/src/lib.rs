@@ -6,6 +6,10 @@
 //!   ([`TestScene::assert_no_leftovers`]).
 //! * [`Proc`] is a spawned child whose output lines can be awaited; it is killed when dropped
 //!   and when the test's [`Watchdog`] fires.
+//! * [`fingerprint`] gives canonical forms of archived segments, to compare incremental
+//!   builds with fresh ones.
+
+pub mod fingerprint;
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -15,7 +19,7 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use rustix::process::{Pid, Signal, kill_process};
-use ygg_reader::protocol::ENV_IOX2_PREFIX;
+use ygg_transport::protocol::ENV_IOX2_PREFIX;
 
 /// Where iceoryx2 keeps node and service files (besides `/dev/shm`).
 pub const ICEORYX2_DIR: &str = "/tmp/iceoryx2";

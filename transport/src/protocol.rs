@@ -55,7 +55,7 @@ pub const SEGMENT_MAGIC: u32 = u32::from_le_bytes(*b"YGGS");
 pub const MANIFEST_MAGIC: u32 = u32::from_le_bytes(*b"YGGM");
 
 /// Version of this protocol; readers reject segments of another version.
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Most layers one manifest may name.
 pub const MAX_LAYERS: usize = 4096;
@@ -191,11 +191,22 @@ pub struct SegmentHeader {
     pub generation: u64,
     /// Meaningful payload bytes (the rest of the last block is zero).
     pub len: u64,
+    /// When the writer began publishing the cut this segment belongs to, in nanoseconds
+    /// since the Unix epoch on the writer's clock (for publish-to-visible latency; not part
+    /// of any archive).
+    pub published_unix_ns: u64,
 }
 
 impl SegmentHeader {
     /// Header for a segment of `kind` with the given identity and length.
-    pub fn new(kind: SegmentKind, layer_id: u32, session: u64, generation: u64, len: u64) -> Self {
+    pub fn new(
+        kind: SegmentKind,
+        layer_id: u32,
+        session: u64,
+        generation: u64,
+        len: u64,
+        published_unix_ns: u64,
+    ) -> Self {
         Self {
             magic: SEGMENT_MAGIC,
             version: PROTOCOL_VERSION,
@@ -205,8 +216,16 @@ impl SegmentHeader {
             session,
             generation,
             len,
+            published_unix_ns,
         }
     }
+}
+
+/// Nanoseconds since the Unix epoch (0 if the clock is before it).
+pub fn unix_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::SystemTime::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
 }
 
 /// A segment that breaks the protocol. Readers report it instead of touching the bytes.
@@ -582,7 +601,7 @@ mod tests {
 
     #[test]
     fn header_check_rejects_length_beyond_payload() {
-        let header = SegmentHeader::new(SegmentKind::Layer, 3, 1, 1, 1000);
+        let header = SegmentHeader::new(SegmentKind::Layer, 3, 1, 1, 1000, 0);
         assert_eq!(
             check_segment_header(&header, SegmentKind::Layer, Some(3), 1024),
             Ok(1000)

@@ -5,8 +5,8 @@ mod dsg {
     use std::path::{Path, PathBuf};
     use std::time::{Duration, Instant};
 
-    use ygg_store::dsg::{
-        self, DsgGraph, DsgVersion, ImportPhase, ImportProgress, LayerKey, NodeKind, NodeSymbol,
+    use ygg_dsg::{
+        DsgGraph, DsgVersion, ImportPhase, ImportProgress, LayerKey, NodeKind, NodeSymbol,
     };
 
     fn fixture(name: &str) -> PathBuf {
@@ -22,7 +22,7 @@ mod dsg {
     }
 
     fn load(name: &str) -> DsgGraph {
-        match dsg::read_file(fixture(name)) {
+        match ygg_dsg::read_file(fixture(name)) {
             Ok(g) => g,
             Err(e) => panic!("{e}"),
         }
@@ -182,7 +182,7 @@ mod dsg {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("office_tiny.json.gz");
         std::fs::write(&path, gz).expect("write");
-        let a = dsg::read_file(&path).expect("gz import");
+        let a = ygg_dsg::read_file(&path).expect("gz import");
         let b = load("office_tiny.json");
         assert_eq!(a.nodes, b.nodes);
         assert_eq!(a.edges, b.edges);
@@ -197,7 +197,8 @@ mod dsg {
                 phases.push(p.phase);
             }
         };
-        dsg::read_file_with_progress(fixture("apartment_dsg.json"), &mut record).expect("import");
+        ygg_dsg::read_file_with_progress(fixture("apartment_dsg.json"), &mut record)
+            .expect("import");
         assert_eq!(
             phases,
             [
@@ -211,8 +212,8 @@ mod dsg {
 
     #[test]
     fn missing_file_is_an_io_error_naming_it() {
-        let e = dsg::read_file("/nonexistent/x.json").expect_err("no file");
-        assert!(matches!(e, dsg::DsgImportError::Io { .. }));
+        let e = ygg_dsg::read_file("/nonexistent/x.json").expect_err("no file");
+        assert!(matches!(e, ygg_dsg::DsgImportError::Io { .. }));
         assert!(e.to_string().contains("/nonexistent/x.json"));
     }
 
@@ -234,7 +235,7 @@ mod dsg {
             return;
         }
         let t = Instant::now();
-        let g = dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
+        let g = ygg_dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
         let first = t.elapsed();
         let c = g.counts();
         assert_eq!(c.nodes, 3_532);
@@ -275,7 +276,8 @@ mod dsg {
                     t_read = t0.elapsed();
                 }
             };
-            let g2 = dsg::read_file_with_progress(&path, &mut cb).unwrap_or_else(|e| panic!("{e}"));
+            let g2 =
+                ygg_dsg::read_file_with_progress(&path, &mut cb).unwrap_or_else(|e| panic!("{e}"));
             let t_all = t0.elapsed();
             assert_eq!(g2.nodes.len(), 3_532);
             read.push(t_read);

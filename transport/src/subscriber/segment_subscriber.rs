@@ -1,4 +1,4 @@
-//! [`ReaderBuilder`] and [`SegmentSubscriber`]: attaching to a scene and assembling
+//! [`SubscriberBuilder`] and [`SegmentSubscriber`]: attaching to a scene and assembling
 //! consistent snapshots.
 
 use std::collections::BTreeMap;
@@ -11,24 +11,27 @@ use iceoryx2::port::ReceiveError as IoxReceiveError;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::{CallbackProgression, Node, NodeBuilder, NodeName, NodeState, ServiceName};
+use iceoryx2::prelude::{CallbackProgression, Node, NodeBuilder, NodeName, NodeState};
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
+use super::segment::{HeldSegment, SegmentSample};
+use super::snapshot::{Snapshot, SnapshotLayer};
+use super::{ReaderOpenError, ReceiveError};
 use crate::protocol::{
     self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
     ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
 };
-use crate::segment::{HeldSegment, SegmentSample};
-use crate::snapshot::{Snapshot, SnapshotLayer};
-use crate::{ReaderOpenError, ReceiveError};
 
 type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
 type SegmentSub = Subscriber<Ipc, [Block128], SegmentHeader>;
 
+/// How often [`SubscriberBuilder::open`] looks for the scene's services while it waits for a
+/// writer ([`SubscriberBuilder::wait_for_writer`]).
+const WRITER_APPEARS_CHECK: Duration = Duration::from_millis(20);
 /// After a writer-gone event, how often liveness is re-checked until the writer's ports are
 /// gone (a writer announces its exit just before it removes them).
 const FAST_CHECK: Duration = Duration::from_millis(5);
@@ -43,8 +46,8 @@ const MAX_PENDING: usize = protocol::SUBSCRIBER_BUFFER_SIZE;
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn core::error::Error>> {
 /// use std::time::Duration;
-/// use ygg_reader::ReaderBuilder;
-/// let mut reader = ReaderBuilder::new("office").open()?;
+/// use ygg_transport::SubscriberBuilder;
+/// let mut reader = SubscriberBuilder::new("office").open()?;
 /// if let Some(snapshot) = reader.wait_next(Duration::from_secs(1))? {
 ///     for (entry, bytes) in snapshot.layers() {
 ///         println!("layer {} generation {}: {} bytes", entry.layer_id, entry.generation, bytes.len());
@@ -54,14 +57,15 @@ const MAX_PENDING: usize = protocol::SUBSCRIBER_BUFFER_SIZE;
 /// # }
 /// ```
 #[derive(Debug, Clone)]
-pub struct ReaderBuilder {
+pub struct SubscriberBuilder {
     scene: String,
     iceoryx_prefix: Option<String>,
     liveness_interval: Duration,
     handle_termination_signals: bool,
+    wait_for_writer: Duration,
 }
 
-impl ReaderBuilder {
+impl SubscriberBuilder {
     /// A builder for a reader of `scene` with default settings.
     pub fn new(scene: &str) -> Self {
         Self {
@@ -69,7 +73,17 @@ impl ReaderBuilder {
             iceoryx_prefix: None,
             liveness_interval: DEFAULT_LIVENESS_INTERVAL,
             handle_termination_signals: false,
+            wait_for_writer: Duration::ZERO,
         }
+    }
+
+    /// How long [`SubscriberBuilder::open`] waits for a writer to create the scene before it
+    /// gives up with [`ReaderOpenError::NoWriter`] (default zero: fail at once). iceoryx2
+    /// announces no service creation, so the wait checks for the scene's services every
+    /// 20 ms.
+    pub fn wait_for_writer(mut self, value: Duration) -> Self {
+        self.wait_for_writer = value;
+        self
     }
 
     /// The iceoryx2 file-name prefix; overrides [`protocol::ENV_IOX2_PREFIX`]. Must match the
@@ -106,6 +120,18 @@ impl ReaderBuilder {
     /// [`ReaderOpenError::NoWriter`] if no writer ever created the scene (or all are gone and
     /// cleaned up), otherwise the variant naming the failing resource.
     pub fn open(self) -> Result<SegmentSubscriber, ReaderOpenError> {
+        let deadline = Instant::now() + self.wait_for_writer;
+        loop {
+            match self.open_once() {
+                Err(ReaderOpenError::NoWriter { .. }) if Instant::now() < deadline => {
+                    std::thread::sleep(WRITER_APPEARS_CHECK);
+                }
+                result => return result,
+            }
+        }
+    }
+
+    fn open_once(&self) -> Result<SegmentSubscriber, ReaderOpenError> {
         let services = SceneServices::new(&self.scene)?;
         let config = protocol::iceoryx_config(self.iceoryx_prefix.as_deref())?;
         let node_name =
@@ -131,14 +157,14 @@ impl ReaderBuilder {
         let events = events_service
             .listener_builder()
             .create()
-            .map_err(|e| port_error(&services.events(), e))?;
+            .map_err(|e| crate::service::port_failure(&services.events(), e))?;
         let manifest = open_segment_sub(&node, &services, &services.manifest())?;
         let readers_service = open_event_service(&node, &services, &services.readers())?;
         let hello = readers_service
             .notifier_builder()
             .default_event_id(EVENT_READER_HELLO)
             .create()
-            .map_err(|e| port_error(&services.readers(), e))?;
+            .map_err(|e| crate::service::port_failure(&services.readers(), e))?;
 
         let mut reader = SegmentSubscriber {
             services,
@@ -247,7 +273,7 @@ impl SegmentSubscriber {
     }
 
     /// Whether SIGINT or SIGTERM arrived since the last call (always false unless
-    /// [`ReaderBuilder::handle_termination_signals`] is on). Lets an application that waits
+    /// [`SubscriberBuilder::handle_termination_signals`] is on). Lets an application that waits
     /// elsewhere (not in [`wait_next`](Self::wait_next)) notice the request.
     pub fn termination_requested(&self) -> bool {
         self.handle_signals && self.node.wait(Duration::ZERO).is_err()
@@ -601,27 +627,13 @@ fn accept_manifest(sample: SegmentSample) -> Result<PendingManifest, protocol::S
     })
 }
 
-fn service_name(name: &str) -> Result<ServiceName, ReaderOpenError> {
-    ServiceName::new(name).map_err(|e| ReaderOpenError::Service {
-        service: name.to_owned(),
-        reason: format!("invalid service name: {e:?}"),
-    })
-}
-
-fn port_error(service: &str, e: impl std::fmt::Display) -> ReaderOpenError {
-    ReaderOpenError::Port {
-        service: service.to_owned(),
-        reason: e.to_string(),
-    }
-}
-
 fn open_segment_sub(
     node: &Node<Ipc>,
     services: &SceneServices,
     name: &str,
 ) -> Result<SubPort, ReaderOpenError> {
     let service = node
-        .service_builder(&service_name(name)?)
+        .service_builder(&crate::service::service_name(name)?)
         .publish_subscribe::<[Block128]>()
         .user_header::<SegmentHeader>()
         .open()
@@ -629,15 +641,12 @@ fn open_segment_sub(
             PublishSubscribeOpenError::DoesNotExist => ReaderOpenError::NoWriter {
                 scene: services.scene().to_owned(),
             },
-            e => ReaderOpenError::Service {
-                service: name.to_owned(),
-                reason: format!("{e:?}"),
-            },
+            e => ReaderOpenError::from(crate::service::service_failure(name, e)),
         })?;
     let subscriber = service
         .subscriber_builder()
         .create()
-        .map_err(|e| port_error(name, e))?;
+        .map_err(|e| crate::service::port_failure(name, e))?;
     Ok(SubPort {
         name: name.to_owned(),
         subscriber,
@@ -650,16 +659,13 @@ fn open_event_service(
     services: &SceneServices,
     name: &str,
 ) -> Result<EventFactory<Ipc>, ReaderOpenError> {
-    node.service_builder(&service_name(name)?)
+    node.service_builder(&crate::service::service_name(name)?)
         .event()
         .open()
         .map_err(|e| match e {
             EventOpenError::DoesNotExist => ReaderOpenError::NoWriter {
                 scene: services.scene().to_owned(),
             },
-            e => ReaderOpenError::Service {
-                service: name.to_owned(),
-                reason: format!("{e:?}"),
-            },
+            e => ReaderOpenError::from(crate::service::service_failure(name, e)),
         })
 }

@@ -75,7 +75,7 @@ pub enum DsgExportError {
 ///
 /// # Examples
 /// ```no_run
-/// use ygg_store::dsg::{self, office::{generate, OfficeParams}};
+/// use ygg_dsg::{self as dsg, office::{generate, OfficeParams}};
 /// let g = generate(OfficeParams { seed: 7, scale: 0.02 });
 /// dsg::write_json(&g, "office.json")?;
 /// assert_eq!(dsg::read_file("office.json")?.nodes, g.nodes);
@@ -100,13 +100,13 @@ pub fn write_json(graph: &DsgGraph, path: impl AsRef<Path>) -> Result<(), DsgExp
 ///
 /// # Examples
 /// ```
-/// use ygg_store::dsg::{self, office::{generate, OfficeParams}};
+/// use ygg_dsg::{self as dsg, office::{generate, OfficeParams}};
 /// let g = generate(OfficeParams { seed: 7, scale: 0.02 });
 /// let bytes = dsg::to_json_bytes(&g);
 /// let back = dsg::parse_json(&bytes, "office.json")?;
 /// assert_eq!(back.nodes, g.nodes);
 /// assert_eq!(back.counts(), g.counts());
-/// # Ok::<(), ygg_store::dsg::DsgImportError>(())
+/// # Ok::<(), ygg_dsg::DsgImportError>(())
 /// ```
 pub fn to_json_bytes(graph: &DsgGraph) -> Vec<u8> {
     let mut out = Vec::with_capacity(estimate_len(graph));

@@ -2,14 +2,14 @@
 //! claimed geometry.
 
 use std::collections::BTreeMap;
-use ygg_store::dsg::{self, DsgGraph, NodeKind};
-use ygg_store::layout::{self, Layout};
+use ygg_dsg::layout::{self, Layout};
+use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::query::{children, nodes_with_label};
 use ygg_store::{NodeId, SceneGraph, SceneView, Scope};
 
 fn fixture(name: &str) -> DsgGraph {
     let path = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
-    dsg::read_file(&path).unwrap()
+    ygg_dsg::read_file(&path).unwrap()
 }
 
 /// Object id -> sorted claimed points (as bit patterns), read through the layout.

@@ -2,7 +2,7 @@
 
 use crate::protocol::{ENV_IOX2_PREFIX, PrefixError, SceneNameError, SegmentError};
 
-/// Why [`ReaderBuilder::open`](crate::ReaderBuilder::open) failed.
+/// Why [`SubscriberBuilder::open`](crate::SubscriberBuilder::open) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReaderOpenError {
     /// The scene name cannot name services.
@@ -90,7 +90,22 @@ pub enum ReceiveError {
         reason: String,
     },
     /// SIGINT or SIGTERM arrived (only with
-    /// [`ReaderBuilder::handle_termination_signals`](crate::ReaderBuilder::handle_termination_signals)).
+    /// [`SubscriberBuilder::handle_termination_signals`](crate::SubscriberBuilder::handle_termination_signals)).
     #[error("termination requested by a signal")]
     Terminated,
+}
+
+impl From<crate::service::SetupFailure> for ReaderOpenError {
+    fn from(f: crate::service::SetupFailure) -> Self {
+        let crate::service::SetupFailure {
+            service,
+            reason,
+            port,
+        } = f;
+        if port {
+            Self::Port { service, reason }
+        } else {
+            Self::Service { service, reason }
+        }
+    }
 }

@@ -5,8 +5,8 @@ mod dsg {
     use std::path::{Path, PathBuf};
     use std::time::{Duration, Instant};
 
-    use ygg_store::dsg::office::{OfficeParams, generate};
-    use ygg_store::dsg::{self, DsgGraph, NodeKind};
+    use ygg_dsg::office::{OfficeParams, generate};
+    use ygg_dsg::{DsgGraph, NodeKind};
 
     fn same_kind_of_office(generated: &DsgGraph, imported: &DsgGraph, same_faces: bool) {
         let (mut a, mut b) = (generated.counts(), imported.counts());
@@ -42,7 +42,7 @@ mod dsg {
     #[test]
     fn tiny_generated_office_matches_the_tiny_fixture() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/office_tiny.json");
-        let imported = dsg::read_file(path).unwrap_or_else(|e| panic!("{e}"));
+        let imported = ygg_dsg::read_file(path).unwrap_or_else(|e| panic!("{e}"));
         let generated = generate(OfficeParams {
             seed: 7,
             scale: 0.02,
@@ -61,7 +61,7 @@ mod dsg {
             eprintln!("note: {} not found, skipping", path.display());
             return;
         }
-        let imported = dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
+        let imported = ygg_dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
         let generated = generate(OfficeParams::default());
         same_kind_of_office(&generated, &imported, true);
     }

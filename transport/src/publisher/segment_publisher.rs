@@ -1,4 +1,4 @@
-//! [`WriterBuilder`] and [`SegmentPublisher`]: one scene's publishing side.
+//! [`PublisherBuilder`] and [`SegmentPublisher`]: one scene's publishing side.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -7,6 +7,12 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 
+use crate::protocol::{
+    self, BLOCK_SIZE, Block128, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, EVENT_ID_MAX,
+    EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP,
+    HISTORY_SIZE, Ipc, MANIFEST_LAYER_ID, MAX_LAYERS, ManifestEntry, PUBLISHER_MAX_LOANED,
+    SUBSCRIBER_BUFFER_SIZE, SUBSCRIBER_MAX_BORROWED, SceneServices, SegmentHeader, SegmentKind,
+};
 use iceoryx2::config::Config;
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::Listener;
@@ -15,18 +21,11 @@ use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::{
     AllocationStrategy, CallbackProgression, EventId, Node, NodeBuilder, NodeName, NodeState,
-    ServiceName,
 };
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
-use ygg_reader::protocol::{
-    self, BLOCK_SIZE, Block128, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, EVENT_ID_MAX,
-    EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP,
-    HISTORY_SIZE, Ipc, MANIFEST_LAYER_ID, MAX_LAYERS, ManifestEntry, PUBLISHER_MAX_LOANED,
-    SUBSCRIBER_BUFFER_SIZE, SUBSCRIBER_MAX_BORROWED, SceneServices, SegmentHeader, SegmentKind,
-};
 
-use crate::{PublishError, WriterCreateError, WriterWaitError, loan, shm};
+use super::{PublishError, WriterCreateError, WriterWaitError, loan, shm};
 
 type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
 type SegmentPort = Publisher<Ipc, [Block128], SegmentHeader>;
@@ -41,15 +40,15 @@ const CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
 ///
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn core::error::Error>> {
-/// use ygg_writer::WriterBuilder;
-/// let mut writer = WriterBuilder::new("office").max_readers(4).create()?;
+/// use ygg_transport::{ManifestEntry, PublisherBuilder};
+/// let mut writer = PublisherBuilder::new("office").max_readers(4).create()?;
 /// writer.publish_layer(1, 1, 5, |buf| buf.copy_from_slice(b"hello"))?;
-/// writer.publish_manifest(1, &[ygg_reader::protocol::ManifestEntry { layer_id: 1, generation: 1 }], 0, |_| {})?;
+/// writer.publish_manifest(1, &[ManifestEntry { layer_id: 1, generation: 1 }], 0, |_| {})?;
 /// # Ok(())
 /// # }
 /// ```
 #[derive(Debug, Clone)]
-pub struct WriterBuilder {
+pub struct PublisherBuilder {
     scene: String,
     max_readers: usize,
     initial_segment_bytes: usize,
@@ -58,7 +57,7 @@ pub struct WriterBuilder {
     liveness_interval: Duration,
 }
 
-impl WriterBuilder {
+impl PublisherBuilder {
     /// A builder for the writer of `scene` with default settings.
     pub fn new(scene: &str) -> Self {
         Self {
@@ -151,19 +150,19 @@ impl WriterBuilder {
             .notifier_builder()
             .default_event_id(EVENT_SNAPSHOT_PUBLISHED)
             .create()
-            .map_err(|e| port_error(&events_name, e))?;
+            .map_err(|e| crate::service::port_failure(&events_name, e))?;
 
         let readers_name = services.readers();
         let readers = open_event_service(&node, &readers_name, self.max_readers, false)?;
         let hello_listener = readers
             .listener_builder()
             .create()
-            .map_err(|e| port_error(&readers_name, e))?;
+            .map_err(|e| crate::service::port_failure(&readers_name, e))?;
         let stop_notifier = readers
             .notifier_builder()
             .default_event_id(EVENT_WRITER_STOP)
             .create()
-            .map_err(|e| port_error(&readers_name, e))?;
+            .map_err(|e| crate::service::port_failure(&readers_name, e))?;
 
         let inner = Arc::new(Mutex::new(Inner {
             ports: BTreeMap::from([(MANIFEST_LAYER_ID, manifest)]),
@@ -188,6 +187,7 @@ impl WriterBuilder {
             settings,
             services,
             published: BTreeMap::new(),
+            cut_started_unix_ns: None,
             inner,
             stop,
             helper: Some(helper),
@@ -250,6 +250,8 @@ pub struct SegmentPublisher {
     services: SceneServices,
     /// Last generation published per layer, to check manifests.
     published: BTreeMap<u32, u64>,
+    /// When the cut being published began ([`SegmentPublisher::start_cut`]).
+    cut_started_unix_ns: Option<u64>,
     inner: Arc<Mutex<Inner>>,
     stop: Arc<AtomicBool>,
     helper: Option<JoinHandle<()>>,
@@ -329,12 +331,14 @@ impl SegmentPublisher {
         if layer_id == MANIFEST_LAYER_ID {
             return Err(PublishError::ReservedLayerId(layer_id));
         }
+        self.start_cut();
         let header = SegmentHeader::new(
             SegmentKind::Layer,
             layer_id,
             self.session,
             generation,
             len as u64,
+            self.cut_started_unix_ns.unwrap_or_default(),
         );
         let mut inner = lock(&self.inner);
         let service =
@@ -417,12 +421,14 @@ impl SegmentPublisher {
         let total = prefix_len
             .checked_add(len)
             .ok_or(PublishError::TooLarge { len })?;
+        self.start_cut();
         let header = SegmentHeader::new(
             SegmentKind::Manifest,
             MANIFEST_LAYER_ID,
             self.session,
             generation,
             total as u64,
+            self.cut_started_unix_ns.take().unwrap_or_default(),
         );
         let inner = lock(&self.inner);
         let manifest = inner
@@ -436,6 +442,15 @@ impl SegmentPublisher {
         })?;
         inner.notify(EVENT_SNAPSHOT_PUBLISHED);
         Ok(())
+    }
+
+    /// Marks now as the start of the cut being published, unless a layer of it was already
+    /// published (the first publish call of a cut marks it otherwise). Every segment of the
+    /// cut carries this time in [`SegmentHeader::published_unix_ns`]; call it before building
+    /// the first segment so that readers' publish-to-visible latency includes the build.
+    pub fn start_cut(&mut self) {
+        self.cut_started_unix_ns
+            .get_or_insert_with(protocol::unix_ns);
     }
 
     /// Stops publishing `layer_id` and removes its service once no reader holds it. Publish a
@@ -527,20 +542,6 @@ where
     Ok(())
 }
 
-fn service_name(name: &str) -> Result<ServiceName, WriterCreateError> {
-    ServiceName::new(name).map_err(|e| WriterCreateError::Service {
-        service: name.to_owned(),
-        reason: format!("invalid service name: {e:?}"),
-    })
-}
-
-fn port_error(service: &str, e: impl std::fmt::Display) -> WriterCreateError {
-    WriterCreateError::Port {
-        service: service.to_owned(),
-        reason: e.to_string(),
-    }
-}
-
 /// Opens or creates a segment service with the never-block QoS and claims its only publisher.
 fn open_segment_port(
     node: &Node<Ipc>,
@@ -548,7 +549,7 @@ fn open_segment_port(
     settings: PortSettings,
 ) -> Result<SegmentService, WriterCreateError> {
     let service = node
-        .service_builder(&service_name(name)?)
+        .service_builder(&crate::service::service_name(name)?)
         .publish_subscribe::<[Block128]>()
         .user_header::<SegmentHeader>()
         .max_publishers(1)
@@ -559,10 +560,7 @@ fn open_segment_port(
         .subscriber_max_borrowed_samples(SUBSCRIBER_MAX_BORROWED)
         .enable_safe_overflow(true)
         .open_or_create()
-        .map_err(|e| WriterCreateError::Service {
-            service: name.to_owned(),
-            reason: format!("{e:?}"),
-        })?;
+        .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))?;
     let publisher = service
         .publisher_builder()
         .max_loaned_samples(PUBLISHER_MAX_LOANED)
@@ -575,7 +573,7 @@ fn open_segment_port(
                     scene: scene_of(name),
                 }
             }
-            e => port_error(name, e),
+            e => crate::service::port_failure(name, e).into(),
         })?;
     Ok(SegmentService {
         name: name.to_owned(),
@@ -598,7 +596,7 @@ fn open_event_service(
     to_readers: bool,
 ) -> Result<EventFactory<Ipc>, WriterCreateError> {
     let mut builder = node
-        .service_builder(&service_name(name)?)
+        .service_builder(&crate::service::service_name(name)?)
         .event()
         .max_nodes(max_readers + 2)
         .max_listeners(max_readers + 2)
@@ -611,10 +609,7 @@ fn open_event_service(
     }
     builder
         .open_or_create()
-        .map_err(|e| WriterCreateError::Service {
-            service: name.to_owned(),
-            reason: format!("{e:?}"),
-        })
+        .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))
 }
 
 /// Answers reader announcements and removes resources of dead readers until `stop` is set.

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::PublishError;
+use super::PublishError;
 
 /// Extra room required beyond the segment itself, for iceoryx2's management data and the
 /// pages of sample headers.

@@ -1,5 +1,14 @@
-//! Spark-DSG interchange: a JSON importer and a seeded synthetic office generator,
-//! both producing the plain-data [`DsgGraph`].
+//! Spark-DSG support for Yggdrasil: the Spark-DSG model, its files, the paper's layouts
+//! and the object queries.
+//!
+//! * [`layout::build`] turns a Spark-DSG graph into a [`ygg_store::SceneGraph`] in one of
+//!   the paper's layouts ([`layout::Layout`]).
+//! * [`objects::Objects`] answers the object-query contract of `ygg-reader query` on any
+//!   view of such a scene, live or archived.
+//! * [`replay::SlamReplay`] drives a SLAM-like stream of mutations over a built scene.
+//!
+//! The generic store (`ygg-store`) knows nothing of Spark-DSG; everything Spark-DSG lives
+//! here. The plain-data model:
 //!
 //! * [`parse_json`] / [`read_file`] import Spark-DSG JSON files: v1.1.x (with
 //!   `SPARK_DSG_header`, `layer_keys`, partitions, optional mesh) and the legacy
@@ -33,6 +42,9 @@
 //! See [`DsgGraph`]. The importer checks them all and returns a [`DsgImportError`]
 //! naming the file, node and field otherwise; it never panics on any input.
 
+#[cfg(not(target_endian = "little"))]
+compile_error!("ygg-dsg builds scenes for ygg-store, which supports little-endian targets only");
+
 mod diag;
 mod error;
 mod export;
@@ -43,7 +55,10 @@ mod progress;
 mod raw;
 mod symbol;
 
+pub mod layout;
+pub mod objects;
 pub mod office;
+pub mod replay;
 
 #[doc(inline)]
 pub use self::error::DsgImportError;

@@ -2,8 +2,8 @@
 
 use std::sync::Arc;
 
+use super::segment::HeldSegment;
 use crate::protocol::ManifestEntry;
-use crate::segment::HeldSegment;
 
 /// One layer of a [`Snapshot`].
 #[derive(Debug, Clone)]
@@ -47,6 +47,12 @@ impl Snapshot {
     /// new one and may start generations over.
     pub fn session(&self) -> u64 {
         self.session
+    }
+
+    /// When the writer began publishing this cut (nanoseconds since the Unix epoch, writer's
+    /// clock; see [`SegmentHeader::published_unix_ns`](crate::protocol::SegmentHeader)).
+    pub fn published_unix_ns(&self) -> u64 {
+        self.manifest.header().published_unix_ns
     }
 
     /// The store's manifest bytes (after the transport prefix).

@@ -9,12 +9,12 @@
 //!   ([`crate::layout::object_mesh_layers`]). A vertex claimed by several objects counts
 //!   for each of them. An object without claimed vertices is never a spatial answer.
 //! * [`Objects::nearest_object`]: the object with the closest vertex (distance as
-//!   [`crate::query::nearest_nodes`] defines it), ties to the smaller id.
+//!   [`ygg_store::query::nearest_nodes`] defines it), ties to the smaller id.
 //! * [`Objects::objects_within`]: every object with a vertex at distance `<= r`
-//!   (exactly the test of [`crate::query::nodes_within_radius`]).
+//!   (exactly the test of [`ygg_store::query::nodes_within_radius`]).
 //! * [`Objects::visible_objects`]: every object with a vertex `v` such that
 //!   `|v - eye| <= range` and the angle between `v - eye` and `dir` is at most the
-//!   half-angle (exactly the test of [`crate::query::visible`] with a [`ConeView`]).
+//!   half-angle (exactly the test of [`ygg_store::query::visible`] with a [`ConeView`]).
 //! * [`Objects::objects_with_label`]: every object node carrying the label. Object
 //!   nodes are the nodes of the object layers: `OBJECTS` in vanilla,
 //!   `room:<id>/claimed-object` in the per-room layouts.
@@ -26,14 +26,14 @@
 //! # How they run
 //! Each query calls the store's spatial queries once per object-mesh layer and merges
 //! the answers, so the layer indexes of mint and saffron (one per room's claimed-mesh
-//! layer) serve nearest and radius queries; visibility runs [`crate::query::visible`]
+//! layer) serve nearest and radius queries; visibility runs [`ygg_store::query::visible`]
 //! from each object whose box can reach the view, using the node indexes mint and
 //! saffron keep on objects. Layouts without indexes (vanilla, chocolate) scan, with the
 //! same answers.
 //!
 //! # Examples
 //! ```
-//! # use ygg_store::{dsg, layout::{self, Layout}, objects::Objects, NodeId};
+//! # use ygg_dsg::{self as dsg, layout::{self, Layout}, objects::Objects}; use ygg_store::NodeId;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let office = dsg::office::generate(dsg::office::OfficeParams { seed: 7, scale: 0.02 });
 //! let graph = layout::build(&office, Layout::Mint)?;
@@ -51,13 +51,13 @@
 //! # Ok(()) }
 //! ```
 
-use crate::dsg::{DsgLayer, LayerKey};
-use crate::index::SpatialIndex;
 use crate::layout::object_mesh_layers;
-use crate::query::{self, ConeView, SpatialQueryError};
-use crate::{Aabb, LayerId, NodeId, Point, SceneView, Scope};
+use crate::{DsgLayer, LayerKey};
 use rustc_hash::FxHashSet;
 use std::sync::OnceLock;
+use ygg_store::index::SpatialIndex;
+use ygg_store::query::{self, ConeView, SpatialQueryError};
+use ygg_store::{Aabb, LayerId, NodeId, Point, SceneView, Scope};
 
 /// Why an object query refused its input. Object queries never panic on bad input.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -126,7 +126,7 @@ impl ObjectQuery {
     ///
     /// # Examples
     /// ```
-    /// # use ygg_store::objects::ObjectQuery;
+    /// # use ygg_dsg::objects::ObjectQuery;
     /// let q = ObjectQuery::from_json(r#"{"op":"objects_within","point":[1,2,0.5],"radius":2}"#);
     /// assert_eq!(q, Ok(ObjectQuery::ObjectsWithin { point: [1.0, 2.0, 0.5], radius: 2.0 }));
     /// let e = ObjectQuery::from_json(r#"{"op":"objects_within","point":[1,2],"radius":2}"#);
@@ -257,7 +257,7 @@ struct Claimant<R> {
     mesh: Vec<R>,
     /// Whether the object keeps a box and a node index and every node below it is one
     /// of its mesh nodes: its box then bounds exactly its claimed vertices, and
-    /// [`crate::query::nearest_in_subtree`] searches exactly them.
+    /// [`ygg_store::query::nearest_in_subtree`] searches exactly them.
     indexed_mesh: bool,
 }
 
@@ -343,7 +343,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     ///
     /// # Examples
     /// ```
-    /// # use ygg_store::{dsg, layout::{self, Layout}, objects::Objects, SceneView};
+    /// # use ygg_dsg::{self as dsg, layout::{self, Layout}, objects::Objects}; use ygg_store::SceneView;
     /// let office = dsg::office::generate(dsg::office::OfficeParams { seed: 7, scale: 0.02 });
     /// let graph = layout::build(&office, Layout::Mint).unwrap();
     /// let everywhere = Objects::new(&graph).objects_within([20.0, 12.0, 1.5], 1000.0).unwrap();
@@ -518,9 +518,9 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// [`SpatialQueryError::NonFinitePoint`] (as [`ObjectQueryError::Spatial`]).
     ///
     /// # Complexity
-    /// One [`crate::query::nearest_nodes`] (`m = 1`) per object-mesh layer (a kd-tree
+    /// One [`ygg_store::query::nearest_nodes`] (`m = 1`) per object-mesh layer (a kd-tree
     /// search where the layer has an index; repeated with a larger `m` only while mesh
-    /// nodes without an object come first), then one [`crate::query::nodes_within_radius`]
+    /// nodes without an object come first), then one [`ygg_store::query::nodes_within_radius`]
     /// at the best distance on the layer(s) holding it, to resolve exact ties.
     pub fn nearest_object(&self, point: Point) -> Result<Option<NodeId>, ObjectQueryError> {
         check_point(&point)?;
@@ -590,7 +590,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// Where every object keeps a box and a node index over exactly its vertices (mint,
     /// saffron): one box test per object, and for an object whose box straddles the
     /// ball a kd-tree search of its node index that stops at the first vertex within
-    /// `radius`. Elsewhere: one [`crate::query::nodes_within_radius`] per object-mesh
+    /// `radius`. Elsewhere: one [`ygg_store::query::nodes_within_radius`] per object-mesh
     /// layer (a kd-tree range search where the layer has an index), then one parent
     /// lookup per mesh node found.
     pub fn objects_within(
@@ -652,7 +652,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// yes. Only an object that neither settles is searched: for an object of many mesh
     /// nodes whose node index holds exactly its vertices (saffron), one radius search of
     /// that index over a ball around the cone, testing points against the cone until the
-    /// first one inside; otherwise [`crate::query::visible`] from the object (a scan of
+    /// first one inside; otherwise [`ygg_store::query::visible`] from the object (a scan of
     /// its vertices that stops at the first visible one).
     pub fn visible_objects(
         &self,
@@ -928,7 +928,7 @@ impl Reach {
     }
 }
 
-/// An upper bound of [`crate::distance_squared`] from `c` to any point inside `b`: per
+/// An upper bound of [`ygg_store::distance_squared`] from `c` to any point inside `b`: per
 /// axis the farther face, evaluated in the same order (rounding is monotone, so no point
 /// of the box is farther).
 fn farthest_distance2(b: &Aabb, c: &Point) -> f32 {
@@ -986,7 +986,7 @@ fn box_distance2(b: &Aabb, eye: &[f64; 3]) -> f64 {
 ///
 /// # Examples
 /// ```
-/// # use ygg_store::{dsg::office, layout::{self, Layout}, objects};
+/// # use ygg_dsg::{office, layout::{self, Layout}, objects};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let g = layout::build(&office::generate(office::OfficeParams { seed: 7, scale: 0.02 }), Layout::Mint)?;
 /// let id = objects::nearest_object(&g, [5.0, 5.0, 1.0])?.expect("the office has objects");
@@ -1007,7 +1007,7 @@ pub fn nearest_object<V: SceneView>(
 ///
 /// # Examples
 /// ```
-/// # use ygg_store::{dsg::office, layout::{self, Layout}, objects};
+/// # use ygg_dsg::{office, layout::{self, Layout}, objects};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let g = layout::build(&office::generate(office::OfficeParams { seed: 7, scale: 0.02 }), Layout::Mint)?;
 /// let all = objects::objects_within(&g, [20.0, 12.0, 1.5], 1000.0)?;
@@ -1030,7 +1030,7 @@ pub fn objects_within<V: SceneView>(
 ///
 /// # Examples
 /// ```
-/// # use ygg_store::{dsg::office, layout::{self, Layout}, objects};
+/// # use ygg_dsg::{office, layout::{self, Layout}, objects};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let g = layout::build(&office::generate(office::OfficeParams { seed: 7, scale: 0.02 }), Layout::Mint)?;
 /// // A full sphere of view sees everything in range; a zero direction is an error.
@@ -1053,7 +1053,7 @@ pub fn visible_objects<V: SceneView>(
 ///
 /// # Examples
 /// ```
-/// # use ygg_store::{dsg::office, layout::{self, Layout}, objects};
+/// # use ygg_dsg::{office, layout::{self, Layout}, objects};
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// let g = layout::build(&office::generate(office::OfficeParams { seed: 7, scale: 0.02 }), Layout::Mint)?;
 /// assert_eq!(objects::objects_with_label(&g, "light").len(), 4);

@@ -7,7 +7,7 @@ mod dsg {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
     use serde_json::{Value, json};
-    use ygg_store::dsg::{self, DsgImportError, LayerKey, NodeSymbol};
+    use ygg_dsg::{DsgImportError, LayerKey, NodeSymbol};
 
     const O0: u64 = 0x4F00_0000_0000_0000;
     const O1: u64 = 0x4F00_0000_0000_0001;
@@ -51,9 +51,9 @@ mod dsg {
         })
     }
 
-    fn parse(v: &Value) -> Result<dsg::DsgGraph, DsgImportError> {
+    fn parse(v: &Value) -> Result<ygg_dsg::DsgGraph, DsgImportError> {
         let bytes = serde_json::to_vec(v).expect("serialize");
-        dsg::parse_json(&bytes, "test.json")
+        ygg_dsg::parse_json(&bytes, "test.json")
     }
 
     fn err(v: &Value) -> DsgImportError {
@@ -93,7 +93,7 @@ mod dsg {
     fn truncated_json_reports_line_and_column() {
         let text = serde_json::to_string_pretty(&doc()).expect("serialize");
         let cut = &text.as_bytes()[..text.len() / 2];
-        let e = dsg::parse_json(cut, "cut.json").expect_err("truncated");
+        let e = ygg_dsg::parse_json(cut, "cut.json").expect_err("truncated");
         assert!(matches!(e, DsgImportError::Syntax { .. }), "{e}");
         let (line, column) = e.line_column().expect("position");
         assert!(line > 10 && column > 0, "{e}");
@@ -107,10 +107,10 @@ mod dsg {
     #[test]
     fn garbage_is_a_syntax_error() {
         for bad in [&b""[..], b"{", b"nul", b"{\"nodes\": [}", b"\xff\xfe"] {
-            let e = dsg::parse_json(bad, "g.json").expect_err("garbage");
+            let e = ygg_dsg::parse_json(bad, "g.json").expect_err("garbage");
             assert!(matches!(e, DsgImportError::Syntax { .. }), "{e}");
         }
-        let e = dsg::parse_json(b"[1,2]", "g.json").expect_err("not an object");
+        let e = ygg_dsg::parse_json(b"[1,2]", "g.json").expect_err("not an object");
         assert!(matches!(e, DsgImportError::InvalidField { .. }), "{e}");
     }
 
@@ -186,7 +186,7 @@ mod dsg {
         let text = serde_json::to_string(&doc())
             .expect("serialize")
             .replace(&R0.to_string(), "5.908722711110091e18");
-        let e = dsg::parse_json(text.as_bytes(), "f.json").expect_err("float id");
+        let e = ygg_dsg::parse_json(text.as_bytes(), "f.json").expect_err("float id");
         assert!(
             e.field()
                 .is_some_and(|f| f.ends_with(".id") || f.ends_with(".target")),
@@ -571,7 +571,7 @@ mod dsg {
     }
 
     fn must_not_panic(bytes: &[u8], what: &str) -> bool {
-        let r = std::panic::catch_unwind(|| dsg::parse_json(bytes, "fuzz.json"));
+        let r = std::panic::catch_unwind(|| ygg_dsg::parse_json(bytes, "fuzz.json"));
         match r {
             Ok(Ok(_)) => true,
             Ok(Err(e)) => {

@@ -1,0 +1,9 @@
+//! The writer side: one scene's segment publisher.
+
+mod error;
+mod loan;
+mod segment_publisher;
+pub mod shm;
+
+pub use error::{PublishError, WriterCreateError, WriterWaitError};
+pub use segment_publisher::{DEFAULT_INITIAL_SEGMENT_BYTES, PublisherBuilder, SegmentPublisher};

@@ -1,0 +1,11 @@
+//! The reader side: attaching to a scene and assembling consistent snapshots of its
+//! segments.
+
+mod error;
+mod segment;
+mod segment_subscriber;
+mod snapshot;
+
+pub use error::{ReaderOpenError, ReceiveError};
+pub use segment_subscriber::{SegmentSubscriber, SubscriberBuilder, WriterStatus};
+pub use snapshot::Snapshot;
