@@ -807,7 +807,10 @@ fn readers_beyond_max_readers_get_a_clear_error() {
         .open()
         .expect_err("second reader must not fit");
     assert!(
-        matches!(err, ygg_reader::ReaderOpenError::Port { .. }),
+        matches!(
+            err,
+            ygg_transport::ReaderOpenError::Setup(ygg_transport::SetupError::Port { .. })
+        ),
         "{err:?}"
     );
     assert!(err.to_string().contains("ygg/"), "{err}");

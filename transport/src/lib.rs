@@ -25,7 +25,7 @@ pub mod protocol;
 mod publisher;
 pub use publisher::shm;
 mod service;
-pub use service::init_iceoryx_logging;
+pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
 pub mod test_pattern;
 

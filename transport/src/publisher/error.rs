@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::SetupError;
 use crate::protocol::{PrefixError, SceneNameError};
 
 /// Why [`PublisherBuilder::create`](crate::PublisherBuilder::create) failed.
@@ -13,6 +14,9 @@ pub enum WriterCreateError {
     /// The iceoryx2 prefix is not a valid file name.
     #[error(transparent)]
     InvalidPrefix(#[from] PrefixError),
+    /// The iceoryx2 node, a service or a port could not be set up.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
     /// Another live writer already publishes this scene.
     #[error(
         "scene {scene:?} already has a live writer (one writer per scene); stop it first, \
@@ -21,29 +25,6 @@ pub enum WriterCreateError {
     AlreadyRunning {
         /// The scene.
         scene: String,
-    },
-    /// The iceoryx2 node could not be created.
-    #[error("cannot create the iceoryx2 node: {reason}")]
-    Node {
-        /// iceoryx2's description.
-        reason: String,
-    },
-    /// A service of the scene could not be created or opened. If it exists with other
-    /// settings (for example a smaller `max_readers`), the reason says so.
-    #[error("cannot open or create service {service:?}: {reason}")]
-    Service {
-        /// The service name.
-        service: String,
-        /// iceoryx2's description.
-        reason: String,
-    },
-    /// A port (publisher, notifier, listener) could not be created.
-    #[error("cannot create a port on service {service:?}: {reason}")]
-    Port {
-        /// The service name.
-        service: String,
-        /// iceoryx2's description.
-        reason: String,
     },
     /// The helper thread that answers new readers could not be started.
     #[error("cannot start the writer's helper thread: {0}")]
@@ -150,19 +131,4 @@ pub enum WriterWaitError {
     /// SIGTERM arrived.
     #[error("termination requested (SIGTERM)")]
     TerminationRequest,
-}
-
-impl From<crate::service::SetupFailure> for WriterCreateError {
-    fn from(f: crate::service::SetupFailure) -> Self {
-        let crate::service::SetupFailure {
-            service,
-            reason,
-            port,
-        } = f;
-        if port {
-            Self::Port { service, reason }
-        } else {
-            Self::Service { service, reason }
-        }
-    }
 }

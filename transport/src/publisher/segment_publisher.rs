@@ -19,9 +19,7 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::update_connections::UpdateConnections;
-use iceoryx2::prelude::{
-    AllocationStrategy, CallbackProgression, EventId, Node, NodeBuilder, NodeName, NodeState,
-};
+use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, EventId, Node, NodeState};
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
@@ -121,19 +119,7 @@ impl PublisherBuilder {
     pub fn create(self) -> Result<SegmentPublisher, WriterCreateError> {
         let services = SceneServices::new(&self.scene)?;
         let config = protocol::iceoryx_config(self.iceoryx_prefix.as_deref())?;
-        let node_name =
-            NodeName::new(&format!("ygg-writer/{}", services.scene())).map_err(|e| {
-                WriterCreateError::Node {
-                    reason: format!("{e:?}"),
-                }
-            })?;
-        let node = NodeBuilder::new()
-            .name(&node_name)
-            .config(&config)
-            .create::<Ipc>()
-            .map_err(|e| WriterCreateError::Node {
-                reason: e.to_string(),
-            })?;
+        let node = crate::service::create_node("ygg-writer", services.scene(), &config)?;
         // Removes services and ports of a writer that was killed, so that its publisher slot is
         // free again. (Node creation does this as well under iceoryx2's default config.)
         node.try_cleanup_dead_nodes();

@@ -1,5 +1,6 @@
 //! Errors of the reader: one enum per operation.
 
+use crate::SetupError;
 use crate::protocol::{ENV_IOX2_PREFIX, PrefixError, SceneNameError, SegmentError};
 
 /// Why [`SubscriberBuilder::open`](crate::SubscriberBuilder::open) failed.
@@ -11,6 +12,9 @@ pub enum ReaderOpenError {
     /// The iceoryx2 prefix is not a valid file name.
     #[error(transparent)]
     InvalidPrefix(#[from] PrefixError),
+    /// The iceoryx2 node, a service or a port could not be set up.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
     /// No writer has published this scene (its services do not exist).
     #[error(
         "no writer publishes scene {scene:?} (is the writer running? writer and readers must \
@@ -19,29 +23,6 @@ pub enum ReaderOpenError {
     NoWriter {
         /// The scene.
         scene: String,
-    },
-    /// The iceoryx2 node could not be created.
-    #[error("cannot create the iceoryx2 node: {reason}")]
-    Node {
-        /// iceoryx2's description.
-        reason: String,
-    },
-    /// A service exists but cannot be opened (other protocol version, too many readers, ...).
-    #[error("cannot open service {service:?}: {reason}")]
-    Service {
-        /// The service name.
-        service: String,
-        /// iceoryx2's description.
-        reason: String,
-    },
-    /// A port (subscriber, listener, notifier) could not be created, for example because the
-    /// scene already has `max_readers` readers.
-    #[error("cannot create a port on service {service:?}: {reason}")]
-    Port {
-        /// The service name.
-        service: String,
-        /// iceoryx2's description.
-        reason: String,
     },
 }
 
@@ -93,19 +74,4 @@ pub enum ReceiveError {
     /// [`SubscriberBuilder::handle_termination_signals`](crate::SubscriberBuilder::handle_termination_signals)).
     #[error("termination requested by a signal")]
     Terminated,
-}
-
-impl From<crate::service::SetupFailure> for ReaderOpenError {
-    fn from(f: crate::service::SetupFailure) -> Self {
-        let crate::service::SetupFailure {
-            service,
-            reason,
-            port,
-        } = f;
-        if port {
-            Self::Port { service, reason }
-        } else {
-            Self::Service { service, reason }
-        }
-    }
 }

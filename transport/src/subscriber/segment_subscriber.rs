@@ -11,7 +11,7 @@ use iceoryx2::port::ReceiveError as IoxReceiveError;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::{CallbackProgression, Node, NodeBuilder, NodeName, NodeState};
+use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::PortFactory as _;
@@ -134,19 +134,7 @@ impl SubscriberBuilder {
     fn open_once(&self) -> Result<SegmentSubscriber, ReaderOpenError> {
         let services = SceneServices::new(&self.scene)?;
         let config = protocol::iceoryx_config(self.iceoryx_prefix.as_deref())?;
-        let node_name =
-            NodeName::new(&format!("ygg-reader/{}", services.scene())).map_err(|e| {
-                ReaderOpenError::Node {
-                    reason: format!("{e:?}"),
-                }
-            })?;
-        let node = NodeBuilder::new()
-            .name(&node_name)
-            .config(&config)
-            .create::<Ipc>()
-            .map_err(|e| ReaderOpenError::Node {
-                reason: e.to_string(),
-            })?;
+        let node = crate::service::create_node("ygg-reader", services.scene(), &config)?;
         if self.handle_termination_signals {
             // The first wait installs iceoryx2's signal handler; a zero wait returns at once.
             let _ = node.wait(Duration::ZERO);
