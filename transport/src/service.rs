@@ -8,11 +8,18 @@
 use iceoryx2::config::Config;
 use iceoryx2::prelude::{Node, NodeBuilder, NodeName, ServiceName};
 
-use crate::protocol::Ipc;
+use crate::protocol::{Ipc, PrefixError, SceneNameError};
 
-/// An iceoryx2 node, service or port of a scene that could not be set up.
+/// A scene's name or prefix is invalid, or its iceoryx2 node, a service or a port could not
+/// be set up.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum SetupError {
+    /// The scene name cannot name services.
+    #[error(transparent)]
+    InvalidSceneName(#[from] SceneNameError),
+    /// The iceoryx2 prefix is not a valid file name.
+    #[error(transparent)]
+    InvalidPrefix(#[from] PrefixError),
     /// The iceoryx2 node could not be created.
     #[error("cannot create the iceoryx2 node: {reason}")]
     Node {

@@ -3,18 +3,12 @@
 use std::path::PathBuf;
 
 use crate::SetupError;
-use crate::protocol::{PrefixError, SceneNameError};
 
 /// Why [`PublisherBuilder::create`](crate::PublisherBuilder::create) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum WriterCreateError {
-    /// The scene name cannot name services.
-    #[error(transparent)]
-    InvalidSceneName(#[from] SceneNameError),
-    /// The iceoryx2 prefix is not a valid file name.
-    #[error(transparent)]
-    InvalidPrefix(#[from] PrefixError),
-    /// The iceoryx2 node, a service or a port could not be set up.
+    /// The scene name or iceoryx2 prefix is invalid, or the iceoryx2 node, a service or a
+    /// port could not be set up.
     #[error(transparent)]
     Setup(#[from] SetupError),
     /// Another live writer already publishes this scene.

@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 
+use crate::SetupError;
 use crate::protocol::{
     self, BLOCK_SIZE, Block128, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, EVENT_ID_MAX,
     EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP,
@@ -74,7 +75,7 @@ impl PublisherBuilder {
     /// `SUBSCRIBER_BUFFER_SIZE + SUBSCRIBER_MAX_BORROWED` more chunks of address space per
     /// segment pool (tmpfs pages are used only when written). A restarted writer that asks for
     /// more readers than the existing services support fails with
-    /// [`WriterCreateError::Service`] while readers keep those services alive.
+    /// [`SetupError::Service`](crate::SetupError::Service) while readers keep those services alive.
     pub fn max_readers(mut self, value: usize) -> Self {
         self.max_readers = value.max(1);
         self
@@ -117,8 +118,9 @@ impl PublisherBuilder {
     /// [`WriterCreateError::AlreadyRunning`] if a live writer publishes the scene; otherwise
     /// the [`WriterCreateError`] variant naming the failing resource.
     pub fn create(self) -> Result<SegmentPublisher, WriterCreateError> {
-        let services = SceneServices::new(&self.scene)?;
-        let config = protocol::iceoryx_config(self.iceoryx_prefix.as_deref())?;
+        let services = SceneServices::new(&self.scene).map_err(SetupError::from)?;
+        let config =
+            protocol::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
         let node = crate::service::create_node("ygg-writer", services.scene(), &config)?;
         // Removes services and ports of a writer that was killed, so that its publisher slot is
         // free again. (Node creation does this as well under iceoryx2's default config.)

@@ -1,18 +1,13 @@
 //! Errors of the reader: one enum per operation.
 
 use crate::SetupError;
-use crate::protocol::{ENV_IOX2_PREFIX, PrefixError, SceneNameError, SegmentError};
+use crate::protocol::{ENV_IOX2_PREFIX, SegmentError};
 
 /// Why [`SubscriberBuilder::open`](crate::SubscriberBuilder::open) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReaderOpenError {
-    /// The scene name cannot name services.
-    #[error(transparent)]
-    InvalidSceneName(#[from] SceneNameError),
-    /// The iceoryx2 prefix is not a valid file name.
-    #[error(transparent)]
-    InvalidPrefix(#[from] PrefixError),
-    /// The iceoryx2 node, a service or a port could not be set up.
+    /// The scene name or iceoryx2 prefix is invalid, or the iceoryx2 node, a service or a
+    /// port could not be set up.
     #[error(transparent)]
     Setup(#[from] SetupError),
     /// No writer has published this scene (its services do not exist).

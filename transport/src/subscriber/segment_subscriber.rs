@@ -21,6 +21,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use super::segment::{HeldSegment, SegmentSample};
 use super::snapshot::{Snapshot, SnapshotLayer};
 use super::{ReaderOpenError, ReceiveError};
+use crate::SetupError;
 use crate::protocol::{
     self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
     ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
@@ -132,8 +133,9 @@ impl SubscriberBuilder {
     }
 
     fn open_once(&self) -> Result<SegmentSubscriber, ReaderOpenError> {
-        let services = SceneServices::new(&self.scene)?;
-        let config = protocol::iceoryx_config(self.iceoryx_prefix.as_deref())?;
+        let services = SceneServices::new(&self.scene).map_err(SetupError::from)?;
+        let config =
+            protocol::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
         let node = crate::service::create_node("ygg-reader", services.scene(), &config)?;
         if self.handle_termination_signals {
             // The first wait installs iceoryx2's signal handler; a zero wait returns at once.
