@@ -5,9 +5,14 @@
 //! validated (rkyv bytecheck plus the store's consistency pass) before any query touches
 //! it. A layer segment is validated once per identity `(session, layer, generation)`;
 //! later snapshots reuse the result only when they hand out the very same bytes (same
-//! address and length, which the transport guarantees for an unchanged layer). The
-//! transport maps samples read-only in the reader; a writer that rewrites a sample after
-//! publishing it breaks the protocol, and is outside what validation can guard.
+//! address and length, which the transport guarantees for an unchanged layer).
+//!
+//! Validation is a check at one moment. The reader maps samples read-only, but the
+//! writer keeps its read-write mapping, and any process of the same user can open the
+//! segment files read-write: such a process can change bytes after they were validated.
+//! With [`SceneReaderBuilder::copy_segments`] the reader copies each newly received
+//! segment into private memory and validates and queries the copy, so nothing another
+//! process does afterwards reaches it (see the crate docs for the whole trust model).
 
 #![expect(
     unsafe_code,
@@ -19,7 +24,8 @@ use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
-    ArchivedScene, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,
+    ArchivedScene, SegmentBytes, layer_unchecked, manifest_unchecked, validate_layer,
+    validate_manifest,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -43,13 +49,36 @@ pub enum SceneReceiveError {
     },
 }
 
-/// A validated, consistent cut of a published scene, held zero-copy.
+/// A validated, consistent cut of a published scene, held zero-copy (or, with
+/// [`SceneReaderBuilder::copy_segments`], as private copies).
 ///
 /// Cheap to clone (an `Arc`); the shared-memory samples stay alive until the last clone
 /// is dropped. Query it through [`SceneSnapshot::view`].
 #[derive(Clone)]
 pub struct SceneSnapshot {
     inner: Arc<Snapshot>,
+    /// In copy mode: the bytes that were validated and are queried instead of `inner`'s.
+    private: Option<Arc<PrivateCut>>,
+}
+
+/// Private copies of a snapshot's manifest and layers (layers in `Snapshot::layers`
+/// order); a layer unchanged since the previous snapshot shares its copy.
+struct PrivateCut {
+    manifest: SegmentBytes,
+    layers: Vec<Arc<SegmentBytes>>,
+}
+
+impl SceneSnapshot {
+    /// The bytes queried: the manifest's and each layer's, in `Snapshot::layers` order.
+    fn bytes(&self) -> (&[u8], Vec<&[u8]>) {
+        match &self.private {
+            Some(p) => (&p.manifest, p.layers.iter().map(|l| &l[..]).collect()),
+            None => (
+                self.inner.manifest_bytes(),
+                self.inner.layers().map(|(_, b)| b).collect(),
+            ),
+        }
+    }
 }
 
 impl SceneSnapshot {
@@ -59,12 +88,14 @@ impl SceneSnapshot {
         // manifest bytes and every layer's bytes of `self.inner` passed
         // `validate_manifest` / `validate_layer` (cached per identical address, length and
         // identity). `self.inner` keeps those exact samples mapped and unchanged.
-        let manifest = unsafe { manifest_unchecked(self.inner.manifest_bytes()) };
-        let layers = self
-            .inner
-            .layers()
+        let (manifest, layers) = self.bytes();
+        // SAFETY: see above; in copy mode the bytes are the private copies that were
+        // validated, which nothing but this reader can reach.
+        let manifest = unsafe { manifest_unchecked(manifest) };
+        let layers = layers
+            .into_iter()
             // SAFETY: as above, each layer's bytes were validated before `accept` returned.
-            .map(|(_, bytes)| unsafe { layer_unchecked(bytes) })
+            .map(|bytes| unsafe { layer_unchecked(bytes) })
             .collect();
         // `accept` ran `ArchivedScene::new` on this cut.
         ArchivedScene::new_prechecked(manifest, layers)
@@ -88,6 +119,8 @@ type SegmentIdentity = (u64, u64, usize, usize);
 pub struct SceneReader {
     subscriber: SegmentSubscriber,
     validated: HashMap<u32, SegmentIdentity>,
+    /// In copy mode: each layer's private copy and the `(session, generation)` it holds.
+    copies: Option<HashMap<u32, ((u64, u64), Arc<SegmentBytes>)>>,
     current: Option<SceneSnapshot>,
     validations: u64,
 }
@@ -96,9 +129,20 @@ pub struct SceneReader {
 #[derive(Debug, Clone)]
 pub struct SceneReaderBuilder {
     subscriber: SubscriberBuilder,
+    copy_segments: bool,
 }
 
 impl SceneReaderBuilder {
+    /// If true, each newly received segment is copied into private memory and the copy is
+    /// validated and queried, so that a process that rewrites the shared segment after
+    /// validation cannot affect this reader (default false: zero-copy). Costs one copy of
+    /// every changed layer per snapshot (a memcpy of its archived size) and the memory of
+    /// the copies; unchanged layers keep their copy.
+    pub fn copy_segments(mut self, value: bool) -> Self {
+        self.copy_segments = value;
+        self
+    }
+
     /// How long [`SceneReaderBuilder::open`] waits for a writer to create the scene (default
     /// zero: fail at once with [`ReaderOpenError::NoWriter`]).
     pub fn wait_for_writer(mut self, value: Duration) -> Self {
@@ -137,6 +181,7 @@ impl SceneReaderBuilder {
         Ok(SceneReader {
             subscriber: self.subscriber.open()?,
             validated: HashMap::new(),
+            copies: self.copy_segments.then(HashMap::new),
             current: None,
             validations: 0,
         })
@@ -148,6 +193,7 @@ impl SceneReader {
     pub fn builder(scene: &str) -> SceneReaderBuilder {
         SceneReaderBuilder {
             subscriber: SubscriberBuilder::new(scene),
+            copy_segments: false,
         }
     }
 
@@ -212,15 +258,21 @@ impl SceneReader {
         {
             return Ok(self.current.clone());
         }
+        let accepted = SceneSnapshot {
+            private: self.private_cut(&snap),
+            inner: snap,
+        };
+        let snap = &accepted.inner;
         let invalid = |source| SceneReceiveError::Invalid {
             scene: self.subscriber.scene().to_owned(),
             generation: snap.generation(),
             source,
         };
-        let manifest = validate_manifest(snap.manifest_bytes(), "manifest").map_err(invalid)?;
+        let (manifest, layer_bytes) = accepted.bytes();
+        let manifest = validate_manifest(manifest, "manifest").map_err(invalid)?;
         let mut layers = Vec::with_capacity(snap.layer_count());
         let mut newly = Vec::new();
-        for (entry, bytes) in snap.layers() {
+        for ((entry, _), bytes) in snap.layers().zip(layer_bytes) {
             let identity = (
                 snap.session(),
                 entry.generation,
@@ -245,8 +297,39 @@ impl SceneReader {
         })?;
         self.validations += newly.len() as u64;
         self.validated.extend(newly);
-        let accepted = SceneSnapshot { inner: snap };
         self.current = Some(accepted.clone());
         Ok(Some(accepted))
     }
+
+    /// In copy mode, private copies of `snap`'s manifest and layers: a layer whose
+    /// `(session, generation)` this reader copied before keeps that copy, every other one
+    /// is copied now. `None` in zero-copy mode.
+    fn private_cut(&mut self, snap: &Snapshot) -> Option<Arc<PrivateCut>> {
+        let copies = self.copies.as_mut()?;
+        let mut layers = Vec::with_capacity(snap.layer_count());
+        for (entry, bytes) in snap.layers() {
+            let key = (snap.session(), entry.generation);
+            let copy = match copies.get(&entry.layer_id) {
+                Some((k, copy)) if *k == key => Arc::clone(copy),
+                _ => {
+                    let copy = Arc::new(private_copy(bytes));
+                    copies.insert(entry.layer_id, (key, Arc::clone(&copy)));
+                    copy
+                }
+            };
+            layers.push(copy);
+        }
+        copies.retain(|id, _| snap.layer_generation(*id).is_some());
+        Some(Arc::new(PrivateCut {
+            manifest: private_copy(snap.manifest_bytes()),
+            layers,
+        }))
+    }
+}
+
+/// `bytes` copied into private memory aligned as archives need.
+fn private_copy(bytes: &[u8]) -> SegmentBytes {
+    let mut copy = SegmentBytes::with_capacity(bytes.len());
+    copy.extend_from_slice(bytes);
+    copy
 }
