@@ -112,6 +112,9 @@ impl SceneSnapshot {
     }
 }
 
+/// A layer's private copy and the `(session, generation)` whose bytes it holds.
+type LayerCopy = ((u64, u64), Arc<SegmentBytes>);
+
 /// Identity of a validated layer segment: session, generation, address and length.
 type SegmentIdentity = (u64, u64, usize, usize);
 
@@ -119,8 +122,8 @@ type SegmentIdentity = (u64, u64, usize, usize);
 pub struct SceneReader {
     subscriber: SegmentSubscriber,
     validated: HashMap<u32, SegmentIdentity>,
-    /// In copy mode: each layer's private copy and the `(session, generation)` it holds.
-    copies: Option<HashMap<u32, ((u64, u64), Arc<SegmentBytes>)>>,
+    /// In copy mode: each layer's private copy.
+    copies: Option<HashMap<u32, LayerCopy>>,
     current: Option<SceneSnapshot>,
     validations: u64,
 }
