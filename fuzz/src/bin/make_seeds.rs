@@ -1,0 +1,116 @@
+//! Writes the seed corpus of every fuzz target into `fuzz/corpus/<target>/seed-*`:
+//! `cargo run --manifest-path fuzz/Cargo.toml --bin make_seeds` (from the repository root).
+//! Seeds are small valid inputs, so that libFuzzer starts from the shapes the decoders
+//! accept rather than from random bytes.
+
+use std::path::Path;
+
+use ygg_dsg::office::{OfficeParams, generate};
+use ygg_store::{FeatureValue, NodeId, SceneGraph};
+use ygg_transport::ManifestEntry;
+use ygg_transport::protocol::{
+    MANIFEST_LAYER_ID, SegmentHeader, SegmentKind, encode_manifest_prefix, manifest_prefix_len,
+};
+
+/// A few layers with every column in use: points, edges, nesting, labels, features, an
+/// exact box, a layer index and a node index.
+fn small_graph() -> Result<SceneGraph, Box<dyn std::error::Error>> {
+    let mut g = SceneGraph::new();
+    let rooms = g.add_layer("rooms")?;
+    let objects = g.add_layer("objects")?;
+    let mesh = g.add_layer("mesh")?;
+    g.add_layer_edge(rooms, objects)?;
+    g.add_layer_edge(objects, mesh)?;
+    g.add_node(NodeId(1), rooms)?;
+    g.enable_bounding_box(NodeId(1))?;
+    for i in 0..4u64 {
+        let object = NodeId(10 + i);
+        g.add_node(object, objects)?;
+        g.add_label(object, if i % 2 == 0 { "chair" } else { "light" })?;
+        g.set_feature(object, "score", FeatureValue::Float(i as f64 * 0.5))?;
+        g.set_feature(object, "name", FeatureValue::Str(format!("o{i}")))?;
+        g.nest(NodeId(1), object)?;
+        let part = NodeId(100 + i);
+        g.add_node(part, mesh)?;
+        g.set_geometry(part, vec![[i as f32, 1.0, 0.5], [i as f32 + 0.3, 1.2, 0.9]])?;
+        g.nest(object, part)?;
+        if i > 0 {
+            g.add_edge(NodeId(9 + i), object, "near")?;
+        }
+    }
+    g.enable_layer_index(mesh)?;
+    g.enable_node_index(NodeId(10))?;
+    Ok(g)
+}
+
+fn header(kind: SegmentKind, layer_id: u32, generation: u64, len: usize) -> Vec<u8> {
+    let h = SegmentHeader::new(kind, layer_id, 1, generation, len as u64, 0);
+    let mut out = Vec::new();
+    out.extend_from_slice(&h.magic.to_le_bytes());
+    out.extend_from_slice(&h.version.to_le_bytes());
+    out.extend_from_slice(&h.kind.to_le_bytes());
+    out.extend_from_slice(&h.layer_id.to_le_bytes());
+    out.extend_from_slice(&h.reserved.to_le_bytes());
+    out.extend_from_slice(&h.session.to_le_bytes());
+    out.extend_from_slice(&h.generation.to_le_bytes());
+    out.extend_from_slice(&h.len.to_le_bytes());
+    out.extend_from_slice(&h.published_unix_ns.to_le_bytes());
+    out
+}
+
+fn write(target: &str, name: &str, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = Path::new("fuzz/corpus").join(target);
+    std::fs::create_dir_all(&dir)?;
+    std::fs::write(dir.join(format!("seed-{name}")), bytes)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let g = small_graph()?;
+    let file = Path::new("fuzz/corpus/open_ygg/seed-small.ygg");
+    std::fs::create_dir_all(file.parent().expect("a folder"))?;
+    g.save(file)?;
+
+    let (manifest, layers) = g.to_segments();
+    for (i, layer) in layers.iter().enumerate() {
+        let mut bytes = header(SegmentKind::Layer, i as u32, 1, layer.len());
+        bytes.extend_from_slice(layer);
+        write("received_segment", &format!("layer{i}"), &bytes)?;
+    }
+    let entries: Vec<ManifestEntry> = (0..layers.len() as u32)
+        .map(|layer_id| ManifestEntry {
+            layer_id,
+            generation: 1,
+        })
+        .collect();
+    let mut prefix = vec![0; manifest_prefix_len(entries.len())];
+    encode_manifest_prefix(&entries, &mut prefix);
+    let mut bytes = header(
+        SegmentKind::Manifest,
+        MANIFEST_LAYER_ID,
+        1,
+        prefix.len() + manifest.len(),
+    );
+    bytes.extend_from_slice(&prefix);
+    bytes.extend_from_slice(&manifest);
+    write("received_segment", "manifest", &bytes)?;
+
+    let mut office = generate(OfficeParams {
+        seed: 7,
+        scale: 0.01,
+    });
+    office.mesh = None;
+    write("dsg_json", "office.json", &ygg_dsg::to_json_bytes(&office))?;
+
+    for (name, line) in [
+        ("nearest", r#"{"op":"nearest_object","point":[5,5,1]}"#),
+        ("within", r#"{"op":"objects_within","point":[5,5,1],"radius":1.5}"#),
+        (
+            "visible",
+            r#"{"op":"visible_objects","eye":[5,5,1],"dir":[1,0,0],"half_angle_deg":45,"range":6}"#,
+        ),
+        ("label", r#"{"op":"objects_with_label","label":"light"}"#),
+    ] {
+        write("query_line", name, line.as_bytes())?;
+    }
+    Ok(())
+}
