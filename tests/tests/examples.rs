@@ -86,5 +86,8 @@ fn office_pair_answers_nearest_and_within_with_object_ids_and_stops_cleanly() {
     }
     // Snapshots keep coming: generations rise.
     let generations: Vec<u64> = lines.iter().map(|l| id(l, "generation")).collect();
-    assert!(generations.windows(2).all(|w| w[0] < w[1]), "{generations:?}");
+    assert!(
+        generations.windows(2).all(|w| w[0] < w[1]),
+        "{generations:?}"
+    );
 }

@@ -214,14 +214,7 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
             (!ok).then(|| format!("{}:\n{}", p.name, p.stderr_tail()))
         })
         .collect();
-    let checked: u64 = procs
-        .iter()
-        .filter_map(|p| p.summary.as_ref()?["checked"].as_u64())
-        .sum();
-    let matched: u64 = procs
-        .iter()
-        .filter_map(|p| p.summary.as_ref()?["matched"].as_u64())
-        .sum();
+    let (checked, matched) = checks(&procs);
     drop(procs);
     match scene.clean_up() {
         None => println!("shared memory: nothing left in /dev/shm"),
@@ -309,13 +302,17 @@ fn print_summary(procs: &[Member], interrupted: bool) {
             num(w, "rss_mb")
         );
     }
-    let checked: u64 = procs
-        .iter()
-        .filter_map(|p| p.summary.as_ref()?["checked"].as_u64())
-        .sum();
-    let matched: u64 = procs
-        .iter()
-        .filter_map(|p| p.summary.as_ref()?["matched"].as_u64())
-        .sum();
+    let (checked, matched) = checks(procs);
     println!("brute-force check: {matched} of {checked} sampled answers matched");
+}
+
+/// Answers checked against brute force and answers that matched, over every summary.
+fn checks(procs: &[Member]) -> (u64, u64) {
+    let sum = |key: &str| {
+        procs
+            .iter()
+            .filter_map(|p| p.summary.as_ref()?[key].as_u64())
+            .sum()
+    };
+    (sum("checked"), sum("matched"))
 }

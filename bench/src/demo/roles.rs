@@ -360,29 +360,11 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
             mesh_layer,
             point,
             radius,
-        } => {
-            let hits = view
-                .layer_nodes(*mesh_layer)
-                .filter(|&n| {
-                    view.points(n)
-                        .iter()
-                        .any(|p| query::within_radius(p, point, *radius))
-                })
-                .map(|n| view.node_id(n));
-            owners(view, hits.collect::<Vec<_>>())
-        }
-        Query::Visible {
-            mesh_layer, cone, ..
-        } => {
-            let hits = view
-                .layer_nodes(*mesh_layer)
-                .filter(|&n| {
-                    view.points(n)
-                        .iter()
-                        .any(|p| cone.contains(p).unwrap_or(false))
-                })
-                .map(|n| view.node_id(n));
-            owners(view, hits.collect::<Vec<_>>())
+        } => owners_of_points(view, *mesh_layer, |p| {
+            query::within_radius(p, point, *radius)
+        }),
+        Query::Visible { mesh_layer, cone } => {
+            owners_of_points(view, *mesh_layer, |p| cone.contains(p).unwrap_or(false))
         }
         Query::Label(label) => {
             let mut ids: Vec<u64> = view
@@ -398,6 +380,20 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
             ids
         }
     }
+}
+
+/// The owners of the nodes of `mesh_layer` with a point that `hit` accepts, by scanning.
+fn owners_of_points(
+    view: &ArchivedScene<'_>,
+    mesh_layer: ygg_store::LayerId,
+    hit: impl Fn(&Point) -> bool,
+) -> Vec<u64> {
+    let hits: Vec<NodeId> = view
+        .layer_nodes(mesh_layer)
+        .filter(|&n| view.points(n).iter().any(&hit))
+        .map(|n| view.node_id(n))
+        .collect();
+    owners(view, hits)
 }
 
 /// The room by recomputing each room's box from its sub-tree's points.

@@ -1,10 +1,10 @@
 //! The ~40 MB graph through shared memory and through a Unix socket (serde + postcard).
 
-use super::super::child::{ReaderProc, Readers, Scene};
+use super::super::child::{ReaderProc, Scene};
 use super::super::report::{Row, fmt_bytes, median, median_p99_us};
 use super::super::socket::{PlainGraph, SocketServer};
 use super::super::{Res, check_interrupted, scenes, unix_ns};
-use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, drive, observe, reader_args, writer};
+use super::drive::{ATTACH_TIMEOUT, Case, EXIT_GRACE, reader_args};
 use super::{BIG_BYTES, Ctx, in_scene};
 use std::time::{Duration, Instant};
 use ygg_dsg::layout::Layout;
@@ -36,21 +36,15 @@ pub(super) fn case_socket(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let plain = PlainGraph::from_view(&graph);
     let nodes = graph.node_count();
     let shm = in_scene(ctx, "shm40", |ctx, scene| {
-        let mut w = writer(scene, graph, 2, 64 * 1024)?;
-        let mut readers = Readers::spawn(1, scene, &reader_args("latency", None), ATTACH_TIMEOUT)?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", None)?;
         let samples = ctx.plan.shm40_samples;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 3, samples, &mut |g, i| {
+        let full = case.observe(&ctx.plan, 3, samples, &mut |g, i| {
             scenes::touch_all_layers(g, i)
         })?;
-        let full = observe(&p, &s);
-        let mut mover = scenes::AgentMover::new(w.graph())?;
+        let mut mover = scenes::AgentMover::new(case.w.graph())?;
         let samples = ctx.plan.office_samples / 2;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 3, samples, &mut |g, _| {
-            mover.step(g)
-        })?;
-        let one = observe(&p, &s);
-        readers.finish(EXIT_GRACE)?;
-        drop(w);
+        let one = case.observe(&ctx.plan, 3, samples, &mut |g, _| mover.step(g))?;
+        case.finish()?;
         Ok([
             full.annotate(
                 Row::latency(

@@ -33,6 +33,52 @@ pub(crate) fn writer(
     Ok(w)
 }
 
+/// A case's writer and its reader processes.
+pub(super) struct Case {
+    /// The writer (its graph already published once).
+    pub(super) w: SceneWriter,
+    /// The readers, each holding its first snapshot.
+    pub(super) readers: Readers,
+}
+
+impl Case {
+    /// A [`writer`] for `scene` owning `graph` (room for `n` readers and one more, first
+    /// segments of `segment_bytes`) and `n` readers in `mode`, querying `query` (a layer
+    /// name) if given.
+    pub(super) fn start(
+        scene: &Scene,
+        graph: SceneGraph,
+        segment_bytes: usize,
+        n: usize,
+        mode: &str,
+        query: Option<&str>,
+    ) -> Res<Case> {
+        let w = writer(scene, graph, n + 1, segment_bytes)?;
+        let readers = Readers::spawn(n, scene, &reader_args(mode, query), ATTACH_TIMEOUT)?;
+        Ok(Case { w, readers })
+    }
+
+    /// [`drive`]s the case and [`observe`]s what the readers saw.
+    pub(super) fn observe(
+        &mut self,
+        plan: &Plan,
+        warmup: usize,
+        n: usize,
+        mutate: &mut dyn FnMut(&mut SceneGraph, u64) -> Res<()>,
+    ) -> Res<Observed> {
+        let (p, s) = drive(plan, &mut self.w, &mut self.readers, warmup, n, mutate)?;
+        Ok(observe(&p, &s))
+    }
+
+    /// Tells the readers to exit, waits for them, then drops the writer.
+    pub(super) fn finish(self) -> Res<()> {
+        self.readers.finish(EXIT_GRACE)?;
+        drop(self.w);
+        Ok(())
+    }
+}
+
+/// Arguments of `ygg-bench ipc reader` for `mode`, with a nearest-node query on `query`.
 pub(super) fn reader_args(mode: &str, query: Option<&str>) -> Vec<String> {
     let mut a = vec!["--mode".to_owned(), mode.to_owned()];
     if let Some(q) = query {
@@ -73,7 +119,7 @@ impl Jitter {
 
 /// Publishes `warmup + n` times (mutating before each), pausing between publishes, then
 /// collects what every reader recorded.
-pub(super) fn drive(
+fn drive(
     plan: &Plan,
     w: &mut SceneWriter,
     readers: &mut Readers,
@@ -155,7 +201,7 @@ pub(super) struct Observed {
     pub(super) bytes: Vec<f64>,
 }
 
-pub(super) fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
+fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
     // Per reader, the snapshots it held, by generation.
     let sorted: Vec<Vec<(u64, [u64; 2])>> = seen
         .iter()

@@ -1,9 +1,8 @@
 //! The office cases: one agent pose against every layer republished, mint and chocolate.
 
-use super::super::child::Readers;
 use super::super::report::{Row, median, median_p99_us};
 use super::super::{Res, scenes};
-use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, drive, observe, reader_args, writer};
+use super::drive::{Case, QUERY_LAYER};
 use super::{Ctx, in_scene};
 use ygg_dsg::layout::Layout;
 
@@ -11,20 +10,12 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let mut rows = case_office_mint(ctx)?;
     let graph = scenes::office(&ctx.office()?.0, Layout::Chocolate)?;
     rows.push(in_scene(ctx, "office-chocolate", |ctx, scene| {
-        let mut w = writer(scene, graph, 2, 64 * 1024)?;
-        let mut readers = Readers::spawn(
-            1,
-            scene,
-            &reader_args("latency", Some(QUERY_LAYER)),
-            ATTACH_TIMEOUT,
-        )?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
         let samples = ctx.plan.full_samples;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 3, samples, &mut |g, i| {
+        let o = case.observe(&ctx.plan, 3, samples, &mut |g, i| {
             scenes::touch_all_layers(g, i)
         })?;
-        readers.finish(EXIT_GRACE)?;
-        drop(w);
-        let o = observe(&p, &s);
+        case.finish()?;
         let (vm, vp) = median_p99_us(&o.visible);
         Ok(o.annotate(
             Row::latency(
@@ -45,25 +36,14 @@ fn case_office_mint(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let graph = ctx.office_mint()?;
     in_scene(ctx, "office", |ctx, scene| {
         let mut mover = scenes::AgentMover::new(&graph)?;
-        let mut w = writer(scene, graph, 2, 64 * 1024)?;
-        let mut readers = Readers::spawn(
-            1,
-            scene,
-            &reader_args("latency", Some(QUERY_LAYER)),
-            ATTACH_TIMEOUT,
-        )?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
         let samples = ctx.plan.office_samples;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 5, samples, &mut |g, _| {
-            mover.step(g)
-        })?;
-        let single = observe(&p, &s);
+        let single = case.observe(&ctx.plan, 5, samples, &mut |g, _| mover.step(g))?;
         let samples = ctx.plan.full_samples;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 3, samples, &mut |g, i| {
+        let full = case.observe(&ctx.plan, 3, samples, &mut |g, i| {
             scenes::touch_all_layers(g, i)
         })?;
-        let full = observe(&p, &s);
-        readers.finish(EXIT_GRACE)?;
-        drop(w);
+        case.finish()?;
         let mut rows = Vec::new();
         for (o, case, what) in [
             (

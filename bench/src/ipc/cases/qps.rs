@@ -1,9 +1,8 @@
 //! `qps_*`: reader queries per second while the writer publishes at 0, 10 and 100 Hz.
 
-use super::super::child::Readers;
 use super::super::report::Row;
 use super::super::{Res, check_interrupted, scenes};
-use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, qps_lines, reader_args, writer};
+use super::drive::{Case, QUERY_LAYER, qps_lines};
 use super::{Ctx, in_scene};
 use std::time::{Duration, Instant};
 
@@ -12,13 +11,8 @@ pub(super) fn case_qps(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let secs = ctx.plan.qps_secs;
     in_scene(ctx, "qps", |_ctx, scene| {
         let mut mover = scenes::AgentMover::new(&graph)?;
-        let mut w = writer(scene, graph, 2, 64 * 1024)?;
-        let mut readers = Readers::spawn(
-            1,
-            scene,
-            &reader_args("qps", Some(QUERY_LAYER)),
-            ATTACH_TIMEOUT,
-        )?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "qps", Some(QUERY_LAYER))?;
+        let Case { w, readers } = &mut case;
         let mut rows = Vec::new();
         for (case, rate) in [("qps_idle", 0.0), ("qps_10Hz", 10.0), ("qps_100Hz", 100.0)] {
             readers.send_all("start")?;
@@ -45,7 +39,7 @@ pub(super) fn case_qps(ctx: &mut Ctx) -> Res<Vec<Row>> {
                 );
             }
             readers.send_all("stop")?;
-            let q = qps_lines(&mut readers)?;
+            let q = qps_lines(readers)?;
             let q = q.first().ok_or("no qps report")?;
             let what = if rate > 0.0 {
                 format!(
@@ -69,8 +63,7 @@ pub(super) fn case_qps(ctx: &mut Ctx) -> Res<Vec<Row>> {
                 ..Row::default()
             });
         }
-        readers.finish(EXIT_GRACE)?;
-        drop(w);
+        case.finish()?;
         Ok(rows)
     })
 }

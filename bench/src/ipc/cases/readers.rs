@@ -1,23 +1,17 @@
 //! `readers_N`: a small update, visible in every one of N reader processes.
 
-use super::super::child::Readers;
 use super::super::report::{Row, median_p99_us};
 use super::super::{Res, scenes};
-use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, drive, observe, reader_args, writer};
+use super::drive::Case;
 use super::{Ctx, in_scene};
 
 pub(super) fn case_readers(ctx: &mut Ctx, n: usize) -> Res<Row> {
     let (graph, node) = scenes::small()?;
     in_scene(ctx, "readers", |ctx, scene| {
-        let mut w = writer(scene, graph, n + 1, 64 * 1024)?;
-        let mut readers = Readers::spawn(n, scene, &reader_args("latency", None), ATTACH_TIMEOUT)?;
+        let mut case = Case::start(scene, graph, 64 * 1024, n, "latency", None)?;
         let samples = ctx.plan.small_samples;
-        let (p, s) = drive(&ctx.plan, &mut w, &mut readers, 5, samples, &mut |g, i| {
-            scenes::nudge(g, node, i)
-        })?;
-        readers.finish(EXIT_GRACE)?;
-        drop(w);
-        let o = observe(&p, &s);
+        let o = case.observe(&ctx.plan, 5, samples, &mut |g, i| scenes::nudge(g, node, i))?;
+        case.finish()?;
         let (any_med, any_p99) = median_p99_us(&o.visible);
         Ok(o.annotate(
             Row::latency(
