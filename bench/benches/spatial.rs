@@ -235,14 +235,13 @@ fn brute_visible(points: &[Point], cone: &ConeView) -> Vec<u32> {
 
 /// Per-call latency percentiles (p50, p99) in nanoseconds over `iters` calls.
 fn percentiles(iters: usize, mut f: impl FnMut(usize) -> Duration) -> (f64, f64) {
-    let mut ns: Vec<u64> = (0..iters).map(|i| f(i).as_nanos() as u64).collect();
-    summarize(&mut ns)
+    let ns: Vec<f64> = (0..iters).map(|i| f(i).as_nanos() as f64).collect();
+    summarize(&ns)
 }
 
-fn summarize(ns: &mut [u64]) -> (f64, f64) {
-    ns.sort_unstable();
-    let at = |q: f64| ns[((ns.len() - 1) as f64 * q).round() as usize] as f64;
-    (at(0.5), at(0.99))
+/// p50 and p99 (nearest rank, [`ygg_testkit::stats`]) of nanosecond samples; 0 when none.
+fn summarize(ns: &[f64]) -> (f64, f64) {
+    ygg_testkit::stats::median_p99(ns).unwrap_or((0.0, 0.0))
 }
 
 /// Per-call p50 / p99 of several variants of one query, called in turn for each query
@@ -251,17 +250,17 @@ fn interleaved(
     iters: usize,
     variants: &mut [(&str, &mut dyn FnMut(usize))],
 ) -> Vec<(String, f64, f64)> {
-    let mut samples: Vec<Vec<u64>> = vec![Vec::with_capacity(iters); variants.len()];
+    let mut samples: Vec<Vec<f64>> = vec![Vec::with_capacity(iters); variants.len()];
     for i in 0..iters {
         for (v, (_, f)) in variants.iter_mut().enumerate() {
             let t = Instant::now();
             f(i);
-            samples[v].push(t.elapsed().as_nanos() as u64);
+            samples[v].push(t.elapsed().as_nanos() as f64);
         }
     }
     variants
         .iter()
-        .zip(samples.iter_mut())
+        .zip(&samples)
         .map(|((name, _), ns)| {
             let (p50, p99) = summarize(ns);
             (name.to_string(), p50, p99)

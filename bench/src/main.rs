@@ -19,6 +19,9 @@ enum Command {
     /// The main job: a writer process serving the built-in office with a live update
     /// stream, and reader processes querying it (planner, visibility, labels).
     Demo(demo::DemoArgs),
+    /// One of the demo's reader processes (planner, visibility, labels) on a live scene,
+    /// printing JSON progress and a summary line.
+    Role(demo::roles::RoleArgs),
     /// Archive size and bytes per node for feature-less graphs of 10k, 100k and 1M nodes.
     ArchiveSizes,
     /// The paper's ablation ladder on the office workload.
@@ -30,6 +33,7 @@ enum Command {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     match Cli::parse().command {
         Command::Demo(args) => demo::run(&args),
+        Command::Role(args) => demo::roles::run(&args),
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),

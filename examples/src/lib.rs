@@ -1,1 +1,2 @@
-//! Minimal Yggdrasil examples: see `writer.rs` and `reader.rs`.
+//! Runnable Yggdrasil writer/reader pairs, one folder per scenario (see `README.md`):
+//! `minimal/` (a hand-built scene) and `office/` (the built-in office in mint layout).

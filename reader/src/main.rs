@@ -6,8 +6,6 @@ mod query_cli;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-mod roles;
-
 use clap::{Parser, Subcommand};
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, test_pattern,
@@ -30,9 +28,6 @@ enum Command {
     Watch(Watch),
     /// Print the current snapshot once and exit.
     Dump(Dump),
-    /// Run a demo consumer (planner, visibility, labels) on a live scene, printing JSON
-    /// progress and a summary line.
-    Role(roles::RoleArgs),
     /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
     /// or the paper's static table of the layouts of a Spark-DSG JSON file.
     Inspect(inspect::InspectArgs),
@@ -84,7 +79,6 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
-        Command::Role(args) => roles::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Inspect(args) => inspect::run(&args)
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),

@@ -25,11 +25,18 @@ const STEP: Duration = Duration::from_secs(30);
 /// Per-test watchdog.
 const WATCHDOG: Duration = Duration::from_secs(120);
 
+/// A writer builder for `scene` (its name and prefix).
+fn publisher(scene: &TestScene) -> PublisherBuilder {
+    PublisherBuilder::new(&scene.name).iceoryx_prefix(&scene.prefix)
+}
+
+/// A reader builder for `scene` (its name and prefix).
+fn subscriber(scene: &TestScene) -> SubscriberBuilder {
+    SubscriberBuilder::new(&scene.name).iceoryx_prefix(&scene.prefix)
+}
+
 fn open_reader(scene: &TestScene) -> SegmentSubscriber {
-    SubscriberBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .open()
-        .expect("open reader")
+    subscriber(scene).open().expect("open reader")
 }
 
 /// Waits for the next snapshot, skipping nothing else.
@@ -54,6 +61,23 @@ fn assert_synthetic(snapshot: &Snapshot) {
         snapshot.manifest_bytes().as_ptr().addr() % protocol::SEGMENT_ALIGN,
         0
     );
+}
+
+/// Asserts that `e` is a [`ReceiveError::Corrupt`] whose source matches `pattern`.
+macro_rules! assert_corrupt {
+    ($e:expr, $pattern:pat) => {
+        assert!(
+            matches!(
+                &$e,
+                ReceiveError::Corrupt {
+                    source: $pattern,
+                    ..
+                }
+            ),
+            "{:?}",
+            $e
+        )
+    };
 }
 
 fn is_snapshot(line: &str) -> bool {
@@ -286,10 +310,7 @@ fn a_second_writer_on_the_same_scene_fails_clearly() {
     assert!(!stderr.contains("panicked"), "stderr: {stderr}");
 
     // In-process too: the typed error.
-    let err = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create()
-        .expect_err("second writer");
+    let err = publisher(&scene).create().expect_err("second writer");
     assert!(
         matches!(err, ygg_writer::WriterCreateError::AlreadyRunning { .. }),
         "{err:?}"
@@ -332,10 +353,7 @@ fn sigint_and_sigterm_exit_cleanly_and_remove_shared_memory() {
 #[test]
 fn shared_memory_full_is_an_error_before_anything_is_written() {
     let scene = TestScene::new("full");
-    let mut writer = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create()
-        .expect("writer");
+    let mut writer = publisher(&scene).create().expect("writer");
     let free = ygg_transport::shm::free_bytes(std::path::Path::new(protocol::DEFAULT_SHM_DIR))
         .expect("statvfs");
     let too_big = usize::try_from(free).expect("64-bit") + (1 << 30);
@@ -355,21 +373,8 @@ fn shared_memory_full_is_an_error_before_anything_is_written() {
     assert!(
         err_text(&writer.publish_layer(1, 1, too_big, |_| {})).contains("shared memory is full")
     );
-    // The writer still works.
-    writer
-        .publish_layer(1, 1, 64, |buf| test_pattern::write(buf, 1, 1))
-        .expect("small publish");
-    writer
-        .publish_manifest(
-            1,
-            &[ManifestEntry {
-                layer_id: 1,
-                generation: 1,
-            }],
-            0,
-            |_| {},
-        )
-        .expect("manifest");
+    // The writer still works: a small layer and its manifest go out.
+    scene_reader_ready(&scene, &mut writer);
     drop(writer);
     scene.assert_no_leftovers(STEP);
 }
@@ -385,10 +390,7 @@ fn err_text<T>(result: &Result<T, PublishError>) -> String {
 #[test]
 fn manifests_must_name_published_generations() {
     let scene = TestScene::new("manifest");
-    let mut writer = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create()
-        .expect("writer");
+    let mut writer = publisher(&scene).create().expect("writer");
     writer
         .publish_layer(2, 5, 16, |b| b.fill(1))
         .expect("layer");
@@ -606,18 +608,12 @@ fn garbage_segments_are_reported_not_crashed_on() {
     // A header claiming more bytes than the payload holds.
     fake.manifest(manifest(1, 10_000), 1, |b| valid_manifest_prefix(b, 1));
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::LengthExceedsPayload {
-                    len: 10_000,
-                    payload: 128
-                },
-                ..
-            }
-        ),
-        "{e:?}"
+    assert_corrupt!(
+        e,
+        SegmentError::LengthExceedsPayload {
+            len: 10_000,
+            payload: 128
+        }
     );
 
     // A wrong magic number.
@@ -625,16 +621,7 @@ fn garbage_segments_are_reported_not_crashed_on() {
     bad.magic = 0xdead_beef;
     fake.manifest(bad, 1, |b| valid_manifest_prefix(b, 1));
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::BadMagic { .. },
-                ..
-            }
-        ),
-        "{e:?}"
-    );
+    assert_corrupt!(e, SegmentError::BadMagic { .. });
 
     // A manifest prefix that claims 100 layers in one block, and one claiming too many.
     fake.manifest(manifest(3, 128), 1, |b| {
@@ -642,31 +629,13 @@ fn garbage_segments_are_reported_not_crashed_on() {
         b[4..8].copy_from_slice(&100u32.to_le_bytes());
     });
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::ManifestTruncated { .. },
-                ..
-            }
-        ),
-        "{e:?}"
-    );
+    assert_corrupt!(e, SegmentError::ManifestTruncated { .. });
     fake.manifest(manifest(4, 128), 1, |b| {
         b[..4].copy_from_slice(&MANIFEST_MAGIC.to_le_bytes());
         b[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
     });
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::TooManyLayers { .. },
-                ..
-            }
-        ),
-        "{e:?}"
-    );
+    assert_corrupt!(e, SegmentError::TooManyLayers { .. });
 
     // Random bytes as the manifest payload.
     fake.manifest(manifest(5, 256), 2, |b| {
@@ -685,31 +654,13 @@ fn garbage_segments_are_reported_not_crashed_on() {
     fake.layer(SegmentHeader::new(SegmentKind::Layer, 8, 1, 6, 16, 0), 1);
     fake.manifest(manifest(6, 256), 2, |b| valid_manifest_prefix(b, 6));
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::LayerIdMismatch { .. },
-                ..
-            }
-        ),
-        "{e:?}"
-    );
+    assert_corrupt!(e, SegmentError::LayerIdMismatch { .. });
     fake.layer(
         SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 1 << 40, 0),
         1,
     );
     let e = next_error(&mut reader, &fake);
-    assert!(
-        matches!(
-            &e,
-            ReceiveError::Corrupt {
-                source: SegmentError::LengthExceedsPayload { .. },
-                ..
-            }
-        ),
-        "{e:?}"
-    );
+    assert_corrupt!(e, SegmentError::LengthExceedsPayload { .. });
     assert!(reader.current().is_none(), "no snapshot from garbage");
 
     // A good layer completes the pending manifest: the reader recovered.
@@ -755,8 +706,7 @@ fn a_writer_that_exits_cleanly_is_reported_gone_at_once() {
     let dog = Watchdog::new(WATCHDOG);
     let mut writer = scene.spawn_writer(&["--layers", "2", "--rate", "20"], &dog);
     writer.expect_line(STEP, |l| l.starts_with("published"));
-    let mut reader = SubscriberBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
+    let mut reader = subscriber(&scene)
         // A killed writer would take this long to notice; a clean exit is announced.
         .liveness_interval(Duration::from_secs(3600))
         .open()
@@ -782,28 +732,9 @@ fn a_writer_that_exits_cleanly_is_reported_gone_at_once() {
 #[test]
 fn readers_beyond_max_readers_get_a_clear_error() {
     let scene = TestScene::new("crowd");
-    let mut writer = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .max_readers(1)
-        .create()
-        .expect("writer");
-    writer
-        .publish_layer(1, 1, 16, |b| b.fill(7))
-        .expect("layer");
-    writer
-        .publish_manifest(
-            1,
-            &[ManifestEntry {
-                layer_id: 1,
-                generation: 1,
-            }],
-            0,
-            |_| {},
-        )
-        .expect("manifest");
-    let first = open_reader(&scene);
-    let err = SubscriberBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
+    let mut writer = publisher(&scene).max_readers(1).create().expect("writer");
+    let first = open_reader(scene_reader_ready(&scene, &mut writer));
+    let err = subscriber(&scene)
         .open()
         .expect_err("second reader must not fit");
     assert!(
@@ -821,8 +752,7 @@ fn readers_beyond_max_readers_get_a_clear_error() {
 #[test]
 fn layers_grow_retire_and_stay_128_byte_aligned() {
     let scene = TestScene::new("grow");
-    let mut writer = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
+    let mut writer = publisher(&scene)
         .initial_segment_bytes(1024)
         .create()
         .expect("writer");
@@ -881,7 +811,7 @@ fn layers_grow_retire_and_stay_128_byte_aligned() {
     scene.assert_no_leftovers(STEP);
 }
 
-/// Publishes generation 1 (layer 1 only) so that a reader can open the scene.
+/// Publishes generation 1 (layer 1 only, 16 bytes) so that a reader can open the scene.
 fn scene_reader_ready<'a>(
     scene: &'a TestScene,
     writer: &mut ygg_transport::SegmentPublisher,

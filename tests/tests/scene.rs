@@ -102,7 +102,7 @@ fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
     // A reader process (the demo's planner) agrees with brute force on every check.
     let mut planner = Proc::spawn(
         scene.command(
-            "ygg-reader",
+            "ygg-bench",
             &[
                 "role",
                 "--scene",

@@ -32,6 +32,7 @@ use ygg_dsg::layout::Layout;
 use ygg_reader::{ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::nearest_nodes;
 use ygg_store::{ArchivedScene, NodeId, Point, SceneView, Scope};
+use ygg_testkit::stats::nearest_rank;
 
 /// Options of the hidden `ygg-bench ipc reader`.
 #[derive(clap::Args, Debug)]
@@ -42,9 +43,6 @@ pub struct ReaderArgs {
     /// iceoryx2 file-name prefix.
     #[arg(long)]
     prefix: String,
-    /// Pid of the benchmark; the reader exits when it is gone.
-    #[arg(long)]
-    parent: u32,
     /// What to do.
     #[arg(long, value_enum)]
     mode: Mode,
@@ -96,11 +94,7 @@ enum Cmd {
 pub fn main(args: &ReaderArgs) -> Res<()> {
     // Die with the benchmark: SIGTERM (handled, so the reader still cleans up) when the
     // parent goes away, even if it was SIGKILLed.
-    rustix::process::set_parent_process_death_signal(Some(rustix::process::Signal::TERM))
-        .map_err(|e| format!("cannot set the parent-death signal: {e}"))?;
-    if rustix::process::getppid().map(|p| p.as_raw_pid() as u32) != Some(args.parent) {
-        return Err("the benchmark exited before this reader started".into());
-    }
+    ygg_testkit::die_with_parent().map_err(|e| format!("cannot die with the benchmark: {e}"))?;
     let _ = ygg_transport::limits::raise_open_file_limit();
     let commands = read_commands();
     match args.mode {
@@ -262,12 +256,7 @@ fn qps(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
         }
         let elapsed = start.elapsed().as_nanos();
         latencies.sort_unstable();
-        let at = |q: f64| {
-            latencies
-                .get(((latencies.len().saturating_sub(1)) as f64 * q).round() as usize)
-                .copied()
-                .unwrap_or(0)
-        };
+        let at = |q: f64| nearest_rank(&latencies, q).unwrap_or(0);
         println!(
             "qps {} {elapsed} {} {} {snapshots}",
             latencies.len(),

@@ -2,6 +2,7 @@
 
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
+use ygg_testkit::stats;
 
 /// One measured case.
 #[derive(Clone, Debug, Default)]
@@ -54,33 +55,15 @@ impl Row {
     }
 }
 
-/// Median and 99th percentile (nearest rank) of nanosecond samples, in µs.
+/// Median and 99th percentile ([`stats::median_p99`], nearest rank) of nanosecond
+/// samples, in µs; NaN when there are none.
 pub fn median_p99_us(samples_ns: &[f64]) -> (f64, f64) {
-    if samples_ns.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let mut v = samples_ns.to_vec();
-    v.sort_unstable_by(f64::total_cmp);
-    let rank = |q: f64| {
-        let i = ((v.len() as f64 * q).ceil() as usize).clamp(1, v.len()) - 1;
-        v[i] / 1e3
-    };
-    (rank(0.5), rank(0.99))
+    stats::median_p99(samples_ns).map_or((f64::NAN, f64::NAN), |(m, p)| (m / 1e3, p / 1e3))
 }
 
-/// Median of a list (NaN when empty).
+/// [`stats::median`] of a list (NaN values ignored; NaN when there are none).
 pub fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_unstable_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
+    stats::median(values).unwrap_or(f64::NAN)
 }
 
 /// Merges the rows of several rounds: per case, the median over rounds of the median,
@@ -372,8 +355,8 @@ pub struct Meta {
     pub leftovers: Vec<String>,
     /// Method notes.
     pub notes: Vec<String>,
-    /// What profiling found about where the time goes.
-    pub findings: Vec<String>,
+    /// The hand-written section of an earlier `ipc.md` ([`hand_written`]), kept as it is.
+    pub hand_written: Option<String>,
     /// The command line.
     pub command: String,
 }
@@ -455,11 +438,10 @@ pub fn to_markdown(meta: &Meta, rows: &[Row], targets: &[Target]) -> String {
             md.push_str(&format!("| `{}` | {} |\n", r.case, cells.join("; ")));
         }
     }
-    if !meta.findings.is_empty() {
-        md.push_str("\n## Where the time goes\n\n");
-        for n in &meta.findings {
-            md.push_str(&format!("- {n}\n"));
-        }
+    if let Some(section) = &meta.hand_written {
+        md.push('\n');
+        md.push_str(section.trim_end());
+        md.push('\n');
     }
     md.push_str("\n## Method\n\n");
     for n in &meta.notes {
@@ -474,6 +456,21 @@ pub fn to_markdown(meta: &Meta, rows: &[Row], targets: &[Target]) -> String {
         }
     ));
     md
+}
+
+/// Heading of the report's hand-written section: findings from profiling, written into
+/// `ipc.md` by hand and carried over when the report is regenerated.
+pub const HAND_WRITTEN: &str = "## Where the time goes";
+
+/// The hand-written section of a report (from its [`HAND_WRITTEN`] heading to the next
+/// `## ` heading), if it has one.
+pub fn hand_written(md: &str) -> Option<String> {
+    let start = md.find(&format!("\n{HAND_WRITTEN}\n"))? + 1;
+    let rest = &md[start..];
+    let end = rest[HAND_WRITTEN.len()..]
+        .find("\n## ")
+        .map_or(rest.len(), |i| i + HAND_WRITTEN.len() + 1);
+    Some(rest[..end].to_owned())
 }
 
 fn fmt_extra(key: &str, v: f64) -> String {
@@ -539,6 +536,16 @@ mod tests {
     }
 
     #[test]
+    fn the_hand_written_section_is_carried_over() {
+        let md = "# Report\n\n## Results\n\nold numbers\n\n## Where the time goes\n\n- by hand\n\n## Method\n\n- m\n";
+        assert_eq!(
+            hand_written(md).as_deref(),
+            Some("## Where the time goes\n\n- by hand\n\n")
+        );
+        assert_eq!(hand_written("# Report\n\n## Method\n"), None);
+    }
+
+    #[test]
     fn json_has_the_required_fields() {
         let meta = Meta {
             machine: json!({"cores": 2}),
@@ -548,7 +555,7 @@ mod tests {
             duration_s: 1.0,
             leftovers: Vec::new(),
             notes: Vec::new(),
-            findings: Vec::new(),
+            hand_written: None,
             command: String::new(),
         };
         let rows = [Row::latency("readers_1", "", &[1000.0, 2000.0])];

@@ -10,9 +10,6 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use ygg_store::{FeatureRef, SceneView};
 
-/// File-name start of the benchmark's sockets in the temp dir: `ygg-ipcbench-<pid>-<n>.sock`.
-pub const SOCKET_TAG: &str = "ygg-ipcbench-";
-
 /// A scene graph as plain owned data, the way a consumer of a serialized graph holds it.
 #[derive(Serialize, Deserialize, Debug, Default)]
 pub struct PlainGraph {
@@ -117,7 +114,8 @@ impl PlainGraph {
     }
 }
 
-/// The writer's end: a listening Unix socket in the temp dir, removed on drop.
+/// The writer's end: a listening Unix socket in the temp dir named after a scene's
+/// prefix (so [`ygg_testkit::remove_stale`] finds it after a killed run), removed on drop.
 pub struct SocketServer {
     path: PathBuf,
     listener: UnixListener,
@@ -125,10 +123,9 @@ pub struct SocketServer {
 }
 
 impl SocketServer {
-    /// Binds a fresh socket.
-    pub fn bind(n: u32) -> Res<Self> {
-        let path =
-            std::env::temp_dir().join(format!("{SOCKET_TAG}{}-{n}.sock", std::process::id()));
+    /// Binds a fresh socket for `scene`.
+    pub fn bind(scene: &ygg_testkit::TestScene) -> Res<Self> {
+        let path = std::env::temp_dir().join(format!("{}ipcbench.sock", scene.prefix));
         let _ = std::fs::remove_file(&path);
         let listener = UnixListener::bind(&path)
             .map_err(|e| format!("cannot bind {}: {e}", path.display()))?;

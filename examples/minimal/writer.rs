@@ -1,11 +1,17 @@
 //! A minimal mapping-stack writer: owns a scene graph, adds an agent pose every 100 ms
-//! and publishes the changed layer. Run: `cargo run --release -p ygg-examples --example writer`.
+//! and publishes the changed layer, until SIGINT or SIGTERM.
+//!
+//! Run: `cargo run --release -p ygg-examples --example minimal_writer [scene]`
+//! (scene `example` by default).
 
 use std::time::Duration;
 use ygg_store::{FeatureValue, NodeId, SceneGraph};
 use ygg_writer::{SceneWriter, WriterWaitError};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let scene = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "example".to_owned());
     let mut g = SceneGraph::new();
     let rooms = g.add_layer("ROOMS")?;
     let objects = g.add_layer("OBJECTS")?;
@@ -22,9 +28,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     g.enable_layer_index(objects)?; // readers query the writer's kd-tree zero-copy
 
-    let mut writer = SceneWriter::builder("example").create(g)?;
+    let mut writer = SceneWriter::builder(&scene).max_readers(8).create(g)?;
     writer.publish()?;
-    println!("serving scene 'example'; Ctrl-C to stop");
+    println!("serving scene={scene}; Ctrl-C to stop");
     for tick in 0u64.. {
         let pose = NodeId(10_000 + tick);
         let graph = writer.graph_mut();
@@ -34,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let report = writer.publish()?; // only AGENTS changed: one layer is sent
         if tick % 50 == 0 {
             println!(
-                "generation {} ({} bytes sent)",
+                "generation={} bytes_sent={}",
                 report.generation, report.bytes_sent
             );
         }
@@ -43,5 +49,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Err(WriterWaitError::Interrupt | WriterWaitError::TerminationRequest) => break,
         }
     }
+    println!("stopped at generation={}", writer.generation());
     Ok(()) // dropping the writer removes its shared memory
 }

@@ -1,14 +1,17 @@
-//! Demo consumers (`ygg-reader role`): a planner, a visibility checker and a label
-//! searcher, each attached to a live scene, querying every new snapshot, checking a
-//! sample of its answers against brute force on the same snapshot, and printing JSON
+//! Demo consumers (`ygg-bench role`): a planner, a visibility checker and a label
+//! searcher, each attached to a live scene, querying every new snapshot (the planner and
+//! the visibility checker through [`Objects`] over the current room's objects), checking
+//! a sample of its answers against brute force on the same snapshot, and printing JSON
 //! progress and summary lines.
 
 use std::time::{Duration, Instant};
 use ygg_dsg::layout;
+use ygg_dsg::objects::{self, Objects};
 use ygg_reader::{SceneReader, SceneSnapshot};
 use ygg_store::query::{self, ConeView};
 use ygg_store::snapshot::ArchivedScene;
 use ygg_store::{NodeId, Point, SceneView, Scope};
+use ygg_testkit::stats;
 
 /// Which consumer to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -21,7 +24,7 @@ pub enum Role {
     Labels,
 }
 
-/// Options of `ygg-reader role`.
+/// Options of `ygg-bench role`.
 #[derive(clap::Args, Debug)]
 pub struct RoleArgs {
     /// Scene name.
@@ -42,9 +45,16 @@ pub struct RoleArgs {
 }
 
 const LABELS: [&str; 6] = ["light", "chair", "shelf", "bulletin", "person", "unicorn"];
+/// The planner's radius, metres.
+const RADIUS: f32 = 1.5;
+/// The visibility checker's view: half-angle (degrees) and range (metres).
+const HALF_ANGLE_DEG: f32 = 45.0;
+const RANGE: f32 = 5.0;
 
 /// Runs a role until `--seconds` pass or a signal arrives.
 pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
+    // Started by the demo: stop when it dies.
+    ygg_testkit::die_with_parent()?;
     let mut reader = attach(&args.scene, args.wait_for_writer)?;
     let start = Instant::now();
     let deadline = start + Duration::from_secs_f64(args.seconds.max(0.0));
@@ -107,8 +117,9 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     drop(checks);
     let (checked, matched) = checker.finish()?;
-    let q = percentiles(&mut query_ns);
-    let v = percentiles(&mut visible_ns);
+    let us = |ns: &[f64]| stats::median_p99(ns).map_or((0.0, 0.0), |(m, p)| (m / 1e3, p / 1e3));
+    let q = us(&query_ns);
+    let v = us(&visible_ns);
     let stale_mean = if staleness.is_empty() {
         0.0
     } else {
@@ -191,15 +202,6 @@ fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, Box<dyn std::error
         .open()?)
 }
 
-fn percentiles(v: &mut [f64]) -> (f64, f64) {
-    if v.is_empty() {
-        return (0.0, 0.0);
-    }
-    v.sort_unstable_by(f64::total_cmp);
-    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize] / 1e3;
-    (at(0.5), at(0.99))
-}
-
 /// One query of a role, kept so the answer can be re-checked by brute force.
 #[derive(Clone, Debug)]
 enum Query {
@@ -268,7 +270,8 @@ fn owners(view: &ArchivedScene<'_>, ids: impl IntoIterator<Item = NodeId>) -> Ve
     out
 }
 
-/// Runs one batch of the role's queries with the store's (indexed) API.
+/// Runs one batch of the role's queries with the indexed APIs ([`Objects`] for the
+/// planner and the visibility checker).
 fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u64>)> {
     let mut out = Vec::new();
     match role {
@@ -289,25 +292,27 @@ fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u
             let Some((mesh_layer, claimed)) = room.and_then(|r| room_scope(view, r)) else {
                 return out;
             };
+            // The room's objects answer (the claimed node holds them).
+            let room_objects = Objects::in_subtree(view, claimed);
             if role == Role::Planner {
-                let nearest = query::nearest_nodes(view, Scope::Layer(mesh_layer), pose, 1)
-                    .unwrap_or_default();
+                let nearest = room_objects.nearest_object(pose).ok().flatten();
                 out.push((
                     Query::Nearest {
                         mesh_layer,
                         point: pose,
                     },
-                    owners(view, nearest.into_iter().map(|n| n.0)),
+                    nearest.map(|n| n.0).into_iter().collect(),
                 ));
-                let within = query::nodes_within_radius(view, Scope::Layer(mesh_layer), pose, 1.5)
+                let within = room_objects
+                    .objects_within(pose, RADIUS)
                     .unwrap_or_default();
                 out.push((
                     Query::Within {
                         mesh_layer,
                         point: pose,
-                        radius: 1.5,
+                        radius: RADIUS,
                     },
-                    owners(view, within),
+                    within.into_iter().map(|n| n.0).collect(),
                 ));
             } else {
                 let d = [pose[0] - prev[0], pose[1] - prev[1], 0.0];
@@ -316,18 +321,16 @@ fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u
                 } else {
                     d
                 };
-                let cone = ConeView {
-                    eye: pose,
-                    dir,
-                    half_angle: 45f32.to_radians(),
-                    range: 5.0,
+                let Ok(cone) = objects::cone_view(pose, dir, HALF_ANGLE_DEG, RANGE) else {
+                    return out;
                 };
-                let seen = query::visible(view, claimed, &cone).unwrap_or_default();
-                let seen = seen.into_iter().filter(|&n| {
-                    view.node(n)
-                        .is_some_and(|x| view.node_layer(x) == mesh_layer)
-                });
-                out.push((Query::Visible { mesh_layer, cone }, owners(view, seen)));
+                let seen = room_objects
+                    .visible_objects(pose, dir, HALF_ANGLE_DEG, RANGE)
+                    .unwrap_or_default();
+                out.push((
+                    Query::Visible { mesh_layer, cone },
+                    seen.into_iter().map(|n| n.0).collect(),
+                ));
             }
         }
     }
@@ -357,29 +360,11 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
             mesh_layer,
             point,
             radius,
-        } => {
-            let hits = view
-                .layer_nodes(*mesh_layer)
-                .filter(|&n| {
-                    view.points(n)
-                        .iter()
-                        .any(|p| query::within_radius(p, point, *radius))
-                })
-                .map(|n| view.node_id(n));
-            owners(view, hits.collect::<Vec<_>>())
-        }
-        Query::Visible {
-            mesh_layer, cone, ..
-        } => {
-            let hits = view
-                .layer_nodes(*mesh_layer)
-                .filter(|&n| {
-                    view.points(n)
-                        .iter()
-                        .any(|p| cone.contains(p).unwrap_or(false))
-                })
-                .map(|n| view.node_id(n));
-            owners(view, hits.collect::<Vec<_>>())
+        } => owners_of_points(view, *mesh_layer, |p| {
+            query::within_radius(p, point, *radius)
+        }),
+        Query::Visible { mesh_layer, cone } => {
+            owners_of_points(view, *mesh_layer, |p| cone.contains(p).unwrap_or(false))
         }
         Query::Label(label) => {
             let mut ids: Vec<u64> = view
@@ -395,6 +380,20 @@ fn brute_force(view: &ArchivedScene<'_>, q: &Query) -> Vec<u64> {
             ids
         }
     }
+}
+
+/// The owners of the nodes of `mesh_layer` with a point that `hit` accepts, by scanning.
+fn owners_of_points(
+    view: &ArchivedScene<'_>,
+    mesh_layer: ygg_store::LayerId,
+    hit: impl Fn(&Point) -> bool,
+) -> Vec<u64> {
+    let hits: Vec<NodeId> = view
+        .layer_nodes(mesh_layer)
+        .filter(|&n| view.points(n).iter().any(&hit))
+        .map(|n| view.node_id(n))
+        .collect();
+    owners(view, hits)
 }
 
 /// The room by recomputing each room's box from its sub-tree's points.

@@ -1,0 +1,73 @@
+//! The office cases: one agent pose against every layer republished, mint and chocolate.
+
+use super::super::report::{Row, median, median_p99_us};
+use super::super::{Res, scenes};
+use super::drive::{Case, QUERY_LAYER};
+use super::{Ctx, in_scene};
+use ygg_dsg::layout::Layout;
+
+pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
+    let mut rows = case_office_mint(ctx)?;
+    let graph = scenes::office(&ctx.office()?.0, Layout::Chocolate)?;
+    rows.push(in_scene(ctx, "office-chocolate", |ctx, scene| {
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
+        let samples = ctx.plan.full_samples;
+        let o = case.observe(&ctx.plan, 3, samples, &mut |g, i| {
+            scenes::touch_all_layers(g, i)
+        })?;
+        case.finish()?;
+        let (vm, vp) = median_p99_us(&o.visible);
+        Ok(o.annotate(
+            Row::latency(
+                "full_office_chocolate",
+                "reference: the same office in chocolate layout (no spatial indexes to rebuild), every layer republished → first query answered",
+                &o.all_answered,
+            )
+            .with("visible_median_us", vm)
+            .with("visible_p99_us", vp)
+            .with("layers_sent", median(&o.layers_sent))
+            .with("layers_total", o.layers_total as f64),
+        ))
+    })?);
+    Ok(rows)
+}
+
+fn case_office_mint(ctx: &mut Ctx) -> Res<Vec<Row>> {
+    let graph = ctx.office_mint()?;
+    in_scene(ctx, "office", |ctx, scene| {
+        let mut mover = scenes::AgentMover::new(&graph)?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
+        let samples = ctx.plan.office_samples;
+        let single = case.observe(&ctx.plan, 5, samples, &mut |g, _| mover.step(g))?;
+        let samples = ctx.plan.full_samples;
+        let full = case.observe(&ctx.plan, 3, samples, &mut |g, i| {
+            scenes::touch_all_layers(g, i)
+        })?;
+        case.finish()?;
+        let mut rows = Vec::new();
+        for (o, case, what) in [
+            (
+                &single,
+                "layer_update_office",
+                "office (mint): one agent pose moved, only AGENTS republished → first query answered in the reader",
+            ),
+            (
+                &full,
+                "full_office",
+                "office (mint): every layer changed and republished → first query answered in the reader",
+            ),
+        ] {
+            let (vm, vp) = median_p99_us(&o.visible);
+            rows.push(
+                o.annotate(
+                    Row::latency(case, what, &o.all_answered)
+                        .with("visible_median_us", vm)
+                        .with("visible_p99_us", vp)
+                        .with("layers_sent", median(&o.layers_sent))
+                        .with("layers_total", o.layers_total as f64),
+                ),
+            );
+        }
+        Ok(rows)
+    })
+}

@@ -1,0 +1,189 @@
+//! [`TestScene`]: a unique scene name and iceoryx2 prefix per test or run, and the scan
+//! of `/dev/shm` and `/tmp/iceoryx2` for the files of a prefix.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+use ygg_transport::protocol::ENV_IOX2_PREFIX;
+
+use crate::{Proc, Watchdog, binary};
+
+/// Where iceoryx2 keeps node and service files (besides `/dev/shm`).
+pub const ICEORYX2_DIR: &str = "/tmp/iceoryx2";
+
+/// The POSIX shared-memory directory.
+pub const SHM_DIR: &str = "/dev/shm";
+
+/// Start of every prefix [`TestScene::new`] makes: `ygt<pid>x<n>_`.
+pub const PREFIX_TAG: &str = "ygt";
+
+/// A unique scene name and iceoryx2 prefix for one test (or one case of a bench).
+#[derive(Debug)]
+pub struct TestScene {
+    /// The scene name.
+    pub name: String,
+    /// The iceoryx2 file-name prefix (also set in every spawned child's environment).
+    pub prefix: String,
+}
+
+impl TestScene {
+    /// A scene unique to this process and call: `<tag>-<pid>-<n>`, prefix `ygt<pid>x<n>_`.
+    pub fn new(tag: &str) -> Self {
+        static COUNTER: AtomicU32 = AtomicU32::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let pid = std::process::id();
+        Self {
+            name: format!("{tag}-{pid}-{n}"),
+            prefix: format!("{PREFIX_TAG}{pid}x{n}_"),
+        }
+    }
+
+    /// Sets this scene's prefix in `command`'s environment (and clears `IOX2_LOG_LEVEL`).
+    pub fn configure<'c>(&self, command: &'c mut Command) -> &'c mut Command {
+        command
+            .env(ENV_IOX2_PREFIX, &self.prefix)
+            .env_remove("IOX2_LOG_LEVEL")
+    }
+
+    /// A command for the executable at `program` with this scene's prefix and `args`.
+    pub fn command_for(&self, program: &Path, args: &[&str]) -> Command {
+        let mut command = Command::new(program);
+        self.configure(command.args(args));
+        command
+    }
+
+    /// A command for the workspace binary `binary_name` (see [`binary`]) with this
+    /// scene's prefix in its environment and `args`.
+    pub fn command(&self, binary_name: &str, args: &[&str]) -> Command {
+        self.command_for(&binary(binary_name), args)
+    }
+
+    /// Spawns `ygg-writer serve-test --scene <name> <args>`.
+    pub fn spawn_writer(&self, args: &[&str], watchdog: &Watchdog) -> Proc {
+        let mut all = vec!["serve-test", "--scene", &self.name];
+        all.extend_from_slice(args);
+        Proc::spawn(self.command("ygg-writer", &all), "writer", watchdog)
+    }
+
+    /// Spawns `ygg-reader <sub> --scene <name> <args>`.
+    pub fn spawn_reader(&self, sub: &str, args: &[&str], watchdog: &Watchdog) -> Proc {
+        let mut all = vec![sub, "--scene", &self.name];
+        all.extend_from_slice(args);
+        Proc::spawn(self.command("ygg-reader", &all), "reader", watchdog)
+    }
+
+    /// Every file of this scene's prefix in `/dev/shm` and under `/tmp/iceoryx2`.
+    pub fn files(&self) -> Vec<PathBuf> {
+        let mut found = Vec::new();
+        for dir in [SHM_DIR, ICEORYX2_DIR] {
+            collect(Path::new(dir), &|n| n.starts_with(&self.prefix), &mut found);
+        }
+        found
+    }
+
+    /// [`TestScene::files`] except iceoryx2's persistent per-prefix `*.global_mgmt`
+    /// counter (16 bytes, kept by design).
+    pub fn leftovers(&self) -> Vec<PathBuf> {
+        let mut found = self.files();
+        found.retain(|p| !p.to_string_lossy().ends_with(".global_mgmt"));
+        found
+    }
+
+    /// Asserts that the scene left nothing behind, waiting up to `grace` for processes that are
+    /// still exiting, then removes the `global_mgmt` counter too.
+    ///
+    /// # Panics
+    ///
+    /// If files remain after `grace`.
+    pub fn assert_no_leftovers(&self, grace: Duration) {
+        let start = Instant::now();
+        let mut left = self.leftovers();
+        while !left.is_empty() && start.elapsed() < grace {
+            std::thread::sleep(Duration::from_millis(20));
+            left = self.leftovers();
+        }
+        assert!(
+            left.is_empty(),
+            "scene {} left files behind: {left:#?}",
+            self.name
+        );
+        self.remove_all();
+    }
+
+    /// Once every process of the scene has exited: removes every file of the prefix and
+    /// describes the ones left behind besides `global_mgmt` (`None` when there were none).
+    pub fn clean_up(&self) -> Option<String> {
+        let left = self.leftovers();
+        self.remove_all();
+        (!left.is_empty()).then(|| {
+            let first: Vec<String> = left
+                .iter()
+                .take(3)
+                .map(|p| p.display().to_string())
+                .collect();
+            format!("{}: {} files ({})", self.name, left.len(), first.join(", "))
+        })
+    }
+
+    /// Removes every file of this prefix (used after a failed test, and for `global_mgmt`).
+    pub fn remove_all(&self) {
+        for path in self.files() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+}
+
+impl Drop for TestScene {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.remove_all();
+        }
+    }
+}
+
+/// Adds the files below `dir` (recursively) whose name `keep` accepts to `found`.
+fn collect(dir: &Path, keep: &dyn Fn(&str) -> bool, found: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            collect(&path, keep, found);
+        } else if keep(&entry.file_name().to_string_lossy()) {
+            found.push(path);
+        }
+    }
+}
+
+/// Removes the files of [`TestScene`] prefixes (in `/dev/shm`, under `/tmp/iceoryx2`,
+/// and directly in the temp dir: sockets named after a prefix) whose process no longer
+/// exists: what runs killed with SIGKILL could not clean up. Returns how many files were
+/// removed.
+pub fn remove_stale() -> usize {
+    let dead_run = |name: &str| -> bool {
+        let pid = name
+            .strip_prefix(PREFIX_TAG)
+            .and_then(|rest| rest.split(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|d| d.parse::<u32>().ok());
+        pid.is_some_and(|pid| {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        })
+    };
+    let mut found = Vec::new();
+    collect(Path::new(SHM_DIR), &dead_run, &mut found);
+    collect(Path::new(ICEORYX2_DIR), &dead_run, &mut found);
+    if let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) {
+        for e in entries.flatten() {
+            if dead_run(&e.file_name().to_string_lossy()) {
+                found.push(e.path());
+            }
+        }
+    }
+    found
+        .into_iter()
+        .filter(|p| std::fs::remove_file(p).is_ok())
+        .count()
+}
