@@ -20,12 +20,21 @@
     reason = "reading the fields of a validated archived kiddo tree through a layout mirror"
 )]
 
-use super::kdtree::ArchivedKdTree;
+use kiddo::leaf_strategy::VecOfArenas;
+use kiddo::{Eytzinger, ImmutableKdTree};
 use rkyv::boxed::ArchivedBox;
 use rkyv::primitive::{ArchivedI32, ArchivedUsize};
 use rkyv::rend::f32_le;
 use rkyv::tuple::ArchivedTuple2;
 use rkyv::vec::ArchivedVec;
+
+/// The kd-tree of archived and reader-built indexes: kiddo's `ImmutableKdTree` over
+/// `f32` points in 3-D with `u32` items.
+pub type KdTree = ImmutableKdTree<f32, 3>;
+
+/// kiddo's archived form of [`KdTree`], queried in place.
+pub type ArchivedKdTree =
+    kiddo::kd_tree::ArchivedKdTree<f32, u32, Eytzinger, VecOfArenas<f32, u32, 3, 32>, 3, 32>;
 
 /// kiddo 6.3's archived `VecOfArenas<f32, u32, 3, 32>`, field for field.
 #[repr(C)]
@@ -77,7 +86,17 @@ pub(super) fn layout(tree: &ArchivedKdTree) -> &TreeLayout {
 
 /// Leaf tiles, widest first, as kiddo's `VecOfArenas` encodes a leaf: each tile of width
 /// `w` holds `w` x's, `w` y's, `w` z's, then `w` items (16 bytes per point).
-pub(super) const TILE_WIDTHS: [usize; 5] = [32, 8, 4, 2, 1];
+const TILE_WIDTHS: [usize; 5] = [32, 8, 4, 2, 1];
+
+/// The widths of the tiles of a leaf of `len` points, in order (see [`TILE_WIDTHS`]).
+pub(super) fn tile_widths(len: usize) -> impl Iterator<Item = usize> {
+    let mut remaining = len;
+    std::iter::from_fn(move || {
+        let w = TILE_WIDTHS.into_iter().find(|&w| remaining >= w)?;
+        remaining -= w;
+        Some(w)
+    })
+}
 
 /// Checks what kiddo's queries rely on and bytecheck does not verify (see the module
 /// docs), and that every item is below `items`. Linear in the number of points.
@@ -141,12 +160,7 @@ pub(crate) fn check_tree(tree: &ArchivedKdTree, items: usize) -> Result<(), Stri
 }
 
 fn check_leaf(mut bytes: &[u8], len: usize, items: usize) -> Result<(), String> {
-    let mut remaining = len;
-    while remaining > 0 {
-        let w = TILE_WIDTHS
-            .into_iter()
-            .find(|&w| remaining >= w)
-            .expect("width 1 fits any remaining > 0");
+    for w in tile_widths(len) {
         let (coords, rest) = bytes.split_at(12 * w);
         let (item_bytes, rest) = rest.split_at(4 * w);
         if coords
@@ -164,7 +178,6 @@ fn check_leaf(mut bytes: &[u8], len: usize, items: usize) -> Result<(), String> 
             ));
         }
         bytes = rest;
-        remaining -= w;
     }
     Ok(())
 }

@@ -17,23 +17,14 @@
     reason = "re-deriving a reader-built tree from the bytes it was archived into"
 )]
 
-use super::archived_layout::{TILE_WIDTHS, layout};
+use super::archived_layout::{ArchivedKdTree, KdTree, layout, tile_widths};
 use super::spatial_index::{SpatialIndex, prefetch};
 use super::walk::{self, Cell, KdTreeAccessor, TileVisitor};
 use crate::bytes::{SegmentBytes, archive};
 use crate::{NodeId, Point};
-use kiddo::leaf_strategy::VecOfArenas;
-use kiddo::{Eytzinger, ImmutableKdTree, SquaredEuclidean};
+use kiddo::SquaredEuclidean;
 use rkyv::primitive::ArchivedUsize;
 use rkyv::tuple::ArchivedTuple2;
-
-/// The kd-tree of archived and reader-built indexes: kiddo's `ImmutableKdTree` over
-/// `f32` points in 3-D with `u32` items.
-pub type KdTree = ImmutableKdTree<f32, 3>;
-
-/// kiddo's archived form of [`KdTree`], queried in place.
-pub type ArchivedKdTree =
-    kiddo::kd_tree::ArchivedKdTree<f32, u32, Eytzinger, VecOfArenas<f32, u32, 3, 32>, 3, 32>;
 
 /// Radius queries on kiddo trees ask for this much more (relative) and filter exactly:
 /// kiddo updates its pruning bound incrementally, which can round a few ulps high.
@@ -131,7 +122,7 @@ impl KdTreeAccessor for ArchivedTreeAccess<'_> {
         }
     }
 
-    /// The leaf's tiles, widest first (see [`TILE_WIDTHS`]).
+    /// The leaf's tiles, widest first (see `tile_widths`).
     #[inline]
     fn visit_leaf<V: TileVisitor>(&self, (leaf, _): (usize, u32), visitor: &mut V) {
         let e = &self.extents[leaf];
@@ -139,12 +130,7 @@ impl KdTreeAccessor for ArchivedTreeAccess<'_> {
         let Some(mut rest) = self.words.get(start..start + 4 * len) else {
             return; // `check_tree` keeps every extent inside the arena
         };
-        let mut remaining = len;
-        while remaining > 0 {
-            let w = TILE_WIDTHS
-                .into_iter()
-                .find(|&w| remaining >= w)
-                .expect("width 1 fits any remaining > 0");
+        for w in tile_widths(len) {
             let (tile, tail) = rest.split_at(4 * w);
             match w {
                 32 => visit_tile::<32, V>(tile, visitor),
@@ -154,7 +140,6 @@ impl KdTreeAccessor for ArchivedTreeAccess<'_> {
                 _ => visit_tile::<1, V>(tile, visitor),
             }
             rest = tail;
-            remaining -= w;
         }
     }
 }
@@ -337,9 +322,8 @@ mod tests {
         let bytes = l.leaves.leaf_bytes.get();
         let mut out = Vec::new();
         for e in l.leaves.leaf_extents.iter() {
-            let (mut off, mut remaining) = (e.0.to_native() as usize, e.1.to_native() as usize);
-            while remaining > 0 {
-                let w = TILE_WIDTHS.into_iter().find(|&w| remaining >= w).unwrap();
+            let (mut off, len) = (e.0.to_native() as usize, e.1.to_native() as usize);
+            for w in tile_widths(len) {
                 let word = |i: usize| {
                     u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap())
                 };
@@ -347,7 +331,6 @@ mod tests {
                     out.push((word(3 * w + j), [word(j), word(w + j), word(2 * w + j)]));
                 }
                 off += 16 * w;
-                remaining -= w;
             }
         }
         out.sort_unstable();

@@ -43,9 +43,10 @@ mod spatial_index;
 mod walk;
 
 pub(crate) use archived_layout::check_tree;
+pub use archived_layout::{ArchivedKdTree, KdTree};
 pub use from_view::{IndexCache, build_layer_index, build_subtree_index};
 pub(crate) use kdtree::build_tree;
-pub use kdtree::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree};
+pub use kdtree::{ArchivedIndex, KdIndex};
 pub use live::LiveKdTree;
 pub(crate) use live::{Entry, Located};
 pub use live_index::LiveIndex;

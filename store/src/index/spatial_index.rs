@@ -6,8 +6,8 @@ use crate::{NodeId, Point};
 /// Read access to one spatial index: a multiset of points, each tagged with an item that
 /// names the node it belongs to.
 ///
-/// Implemented by [`LiveIndex`] (live graph), [`ArchivedIndex`] (snapshot) and
-/// [`KdIndex`] (built by a reader). The spatial queries use only these methods, so they
+/// Implemented by [`super::LiveIndex`] (live graph), [`super::ArchivedIndex`] (snapshot) and
+/// [`super::KdIndex`] (built by a reader). The spatial queries use only these methods, so they
 /// run unchanged on every kind of index.
 pub trait SpatialIndex {
     /// Number of indexed points.

@@ -217,7 +217,7 @@ impl SnapshotFile {
     }
 
     /// Bytes of each segment: the manifest's, then every layer segment's in manifest
-    /// order (ascending layer id, as [`SceneView::layers`] lists them).
+    /// order (ascending layer id, as [`crate::SceneView::layers`] lists them).
     pub fn segment_sizes(&self) -> (usize, Vec<usize>) {
         (
             self.manifest.len(),

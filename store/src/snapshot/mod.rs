@@ -1,5 +1,5 @@
 //! Archived snapshots: the packed, column-oriented rkyv layout, `.ygg` files, and
-//! [`ArchivedScene`], the [`SceneView`] over validated archived bytes.
+//! [`ArchivedScene`], the [`crate::SceneView`] over validated archived bytes.
 //!
 //! A snapshot is one **manifest** segment plus one **layer** segment per layer. A layer
 //! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids,

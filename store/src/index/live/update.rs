@@ -135,8 +135,9 @@ impl LiveKdTree {
         }
     }
 
-    /// Adds one entry.
-    pub fn insert(&mut self, p: Point, item: u32) {
+    /// The inner nodes from the root down to where `p` descends (in the tree's reused
+    /// path buffer, to be given back), and the leaf reference reached.
+    fn descend(&mut self, p: &Point) -> (Vec<u32>, u32) {
         let mut path = std::mem::take(&mut self.path);
         path.clear();
         let mut r = self.root;
@@ -149,6 +150,12 @@ impl LiveKdTree {
                 n.right
             };
         }
+        (path, r)
+    }
+
+    /// Adds one entry.
+    pub fn insert(&mut self, p: Point, item: u32) {
+        let (path, r) = self.descend(&p);
         self.len += 1;
         let e = Entry { p, item };
         let head = leaf_index(r) as u32;
@@ -222,18 +229,7 @@ impl LiveKdTree {
     /// Removes one entry equal to `(p, item)` (coordinates compared bit for bit).
     /// Returns whether one was found.
     pub fn remove(&mut self, p: Point, item: u32) -> bool {
-        let mut path = std::mem::take(&mut self.path);
-        path.clear();
-        let mut r = self.root;
-        while !is_leaf(r) {
-            path.push(r);
-            let n = &self.inners[r as usize];
-            r = if p[n.dim as usize] < n.split {
-                n.left
-            } else {
-                n.right
-            };
-        }
+        let (mut path, r) = self.descend(&p);
         let head = leaf_index(r) as u32;
         let found = self.chain_remove(head, &p, item);
         if found {
