@@ -158,13 +158,14 @@ fn segments(c: &mut Criterion) {
         let moved = NodeId(segment.ids[segment.ids.len() / 2]);
         let at = live.points(live.node(moved).unwrap()).to_vec();
         let mut step = 0u32;
+        let mut cache = ygg_store::snapshot::SegmentCache::new();
         group.bench_function(format!("cached_after_move/{name}"), |b| {
             b.iter(|| {
                 step += 1;
                 let dx = if step.is_multiple_of(2) { 0.0 } else { 0.01 };
                 let points = at.iter().map(|p| [p[0] + dx, p[1], p[2]]).collect();
                 live.set_geometry(moved, points).unwrap();
-                live.cached_layer_segment(layer).ids.len()
+                cache.layer_segment(&mut live, layer).ids.len()
             })
         });
         segment.archive_into(&mut buf).unwrap();

@@ -3,6 +3,7 @@
 
 use ygg_dsg::layout::{Layout, build};
 use ygg_dsg::office::{OfficeParams, generate};
+use ygg_store::snapshot::SegmentCache;
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView};
 use ygg_testkit::fingerprint::segment_fingerprint;
 
@@ -35,15 +36,16 @@ fn cached_layer_segments_follow_a_slam_stream_on_the_office() {
         (rng % n as u64) as usize
     };
     let mut pose = 1u64 << 60;
+    let mut cache = SegmentCache::new();
     for &l in &layers {
-        g.cached_layer_segment(l);
+        cache.layer_segment(&mut g, l);
     }
-    let check = |g: &mut SceneGraph, before: &[Option<u64>], what: &str| {
+    let mut check = |g: &mut SceneGraph, before: &[Option<u64>], what: &str| {
         for (&l, &generation) in layers.iter().zip(before) {
             if g.layer_generation(l) != generation {
                 let fresh = segment_fingerprint(&g.layer_segment(l));
                 assert_eq!(
-                    segment_fingerprint(g.cached_layer_segment(l)),
+                    segment_fingerprint(cache.layer_segment(g, l)),
                     fresh,
                     "layer {l} {what}"
                 );

@@ -6,7 +6,8 @@
 //! box recomputed from the sub-tree. Floors, walls and ceilings put many points on one
 //! face, so a count rarely reaches zero.
 
-use crate::graph::{Change, Node, SceneGraph};
+use crate::change::Change;
+use crate::graph::{Node, SceneGraph};
 use crate::{Aabb, NodeId, Point};
 
 /// How many of `points` have coordinate `a` equal (`==`) to `v`.

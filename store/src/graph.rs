@@ -13,8 +13,10 @@
 //!
 //! Every mutation validates first and changes nothing when it returns an error.
 
+use crate::change::{Change, LayerChanges};
 use crate::error::{EditResult, GraphEditError};
 use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
+use crate::index::LiveIndexes;
 use crate::{Aabb, LayerId, NodeId, Point};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::BTreeMap;
@@ -54,53 +56,26 @@ pub(crate) struct Layer {
     pub(crate) generation: u64,
     pub(crate) label_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
     pub(crate) key_postings: FxHashMap<Sym, FxHashSet<NodeId>>,
-    /// The last segment built by [`SceneGraph::cached_layer_segment`] and what changed
-    /// since.
-    pub(crate) cache: crate::segment_cache::CachedSegment,
+    /// What changed in the layer since the generation the journal starts from.
+    pub(crate) changes: LayerChanges,
+    /// Unique within the graph for each layer ever added (layer ids may be reused).
+    pub(crate) incarnation: u64,
 }
 
 impl Layer {
-    /// The smallest and largest node id (`u64::MAX` and 0 when empty), from the cached
-    /// segment when it is current.
+    /// The smallest and largest node id (`u64::MAX` and 0 when empty).
     pub(crate) fn id_bounds(&self) -> (u64, u64) {
-        match self.cache.at_generation(self.generation) {
-            Some(segment) => (
-                segment.ids.first().copied().unwrap_or(u64::MAX),
-                segment.ids.last().copied().unwrap_or(0),
-            ),
-            None => self
-                .nodes
-                .iter()
-                .fold((u64::MAX, 0), |(lo, hi), n| (lo.min(n.0), hi.max(n.0))),
-        }
+        self.nodes
+            .iter()
+            .fold((u64::MAX, 0), |(lo, hi), n| (lo.min(n.0), hi.max(n.0)))
     }
 
-    /// Records a change of the layer's archived content: bumps the generation and, when
-    /// a cached segment exists, notes what to rebuild.
+    /// Records a change of the layer's archived content: bumps the generation and notes
+    /// the change in the journal.
     pub(crate) fn touch(&mut self, change: Change) {
         self.generation += 1;
-        self.cache.record(change, self.nodes.len());
+        self.changes.record(change, self.nodes.len());
     }
-}
-
-/// What a mutation changed in a layer, for the incremental segment builder.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Change {
-    /// Anything: rows may have shifted (an index enabled or disabled).
-    All,
-    /// This node's row (edges, nesting, labels, features, box; or a new node).
-    Node(NodeId),
-    /// This node's points (its row and the layer index).
-    Geometry(NodeId),
-    /// The node index rooted at this node.
-    IndexRoot(NodeId),
-    /// This node was removed (whether it had points: the layer index changes then).
-    Removed {
-        /// The node.
-        id: NodeId,
-        /// Whether it had points.
-        had_points: bool,
-    },
 }
 
 /// A layered 3D scene graph that can be edited: the writer's live graph.
@@ -121,10 +96,8 @@ pub struct SceneGraph {
     pub(crate) structure_generation: u64,
     /// Incremented when `label_layers` or `key_layers` changes.
     pub(crate) terms_generation: u64,
-    /// The last manifest built by [`SceneGraph::cached_manifest`].
-    pub(crate) manifest_cache: crate::segment_cache::CachedManifest,
     /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
-    pub(crate) indexes: crate::index::LiveIndexes,
+    pub(crate) indexes: LiveIndexes,
 }
 
 /// Which inverted index a posting belongs to.
@@ -169,6 +142,13 @@ impl SceneGraph {
         }
     }
 
+    /// The change journal of `layer` (which exists), replaced by an empty one starting
+    /// at the layer's current generation.
+    pub(crate) fn take_layer_changes(&mut self, layer: LayerId) -> LayerChanges {
+        let l = self.layers.get_mut(&layer).expect("layer exists");
+        std::mem::replace(&mut l.changes, LayerChanges::new(l.generation))
+    }
+
     // ---- layers -------------------------------------------------------------------
 
     /// Adds an empty layer named `name` and returns its id.
@@ -196,7 +176,8 @@ impl SceneGraph {
                 generation: 1,
                 label_postings: FxHashMap::default(),
                 key_postings: FxHashMap::default(),
-                cache: Default::default(),
+                changes: LayerChanges::new(1),
+                incarnation: self.structure_generation,
             },
         );
         self.layer_names.insert(name.to_owned(), id);

@@ -6,20 +6,23 @@
 //! * See [`query`] for the queries, written once over [`SceneView`].
 //! * See [`index`] for the spatial indexes (live, archived, reader-built) behind the
 //!   spatial queries.
-//! * See [`snapshot`] for archiving a graph and opening a `.ygg` file.
+//! * See [`snapshot`] for archiving a graph and opening a `.ygg` file, and
+//!   [`snapshot::SegmentCache`] for publishing a changing graph incrementally.
 
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
 mod bbox;
+mod bytes;
+mod change;
 mod error;
 mod feature;
 mod graph;
+mod graph_indexes;
 mod id;
 pub mod index;
 mod live_view;
 pub mod query;
-mod segment_cache;
 pub mod snapshot;
 mod view;
 

@@ -4,6 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
+use ygg_store::snapshot::SegmentCache;
 use ygg_store::{SceneGraph, SceneView};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
@@ -37,6 +38,8 @@ pub struct PublishReport {
 /// ```
 pub struct SceneWriter {
     graph: SceneGraph,
+    /// The segments and manifest last published, rebuilt incrementally.
+    segments: SegmentCache,
     publisher: SegmentPublisher,
     published_layers: BTreeSet<u32>,
     generation: u64,
@@ -92,6 +95,7 @@ impl SceneWriterBuilder {
     pub fn create(self, graph: SceneGraph) -> Result<SceneWriter, WriterCreateError> {
         Ok(SceneWriter {
             graph,
+            segments: SegmentCache::new(),
             publisher: self.publisher.create()?,
             published_layers: BTreeSet::new(),
             generation: 0,
@@ -131,7 +135,7 @@ impl SceneWriter {
     /// Publishes every changed layer and then the manifest of the new cut, stamped with
     /// the time this call began (so readers' publish-to-visible latency includes the
     /// archiving). Segments are built incrementally
-    /// ([`SceneGraph::cached_layer_segment`]): a small change to a large layer re-archives
+    /// ([`SegmentCache::layer_segment`]): a small change to a large layer re-archives
     /// that layer but rebuilds only the changed rows.
     ///
     /// # Errors
@@ -146,7 +150,7 @@ impl SceneWriter {
         for layer in &layers {
             let generation = self.graph.layer_generation(*layer).expect("listed layer");
             if self.publisher.layer_generation(layer.0) != Some(generation) {
-                let segment = self.graph.cached_layer_segment(*layer);
+                let segment = self.segments.layer_segment(&mut self.graph, *layer);
                 let len = segment.archived_len();
                 self.publisher
                     .try_publish_layer(layer.0, generation, len, |buf| {
@@ -168,7 +172,7 @@ impl SceneWriter {
         }
         self.published_layers = live;
         let generation = self.generation + 1;
-        let manifest = self.graph.cached_manifest(generation);
+        let manifest = self.segments.manifest(&self.graph, generation);
         let len = manifest.archived_len();
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {

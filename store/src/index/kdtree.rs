@@ -1,53 +1,30 @@
 //! kiddo-backed indexes: [`ArchivedIndex`] (kiddo's archived `ImmutableKdTree` inside a
 //! snapshot's layer segment, queried in place) and [`KdIndex`] (a tree a reader built,
-//! kept in the same archived form), plus [`check_tree`], the checks that make an
-//! archived tree from untrusted bytes safe to query.
+//! kept in the same archived form).
 //!
 //! kiddo builds the trees (median splits, Eytzinger stems, leaf arenas) and answers
 //! radius queries (`within`). Nearest-node search needs one branch-and-bound pass that
 //! knows about nodes and ties (kiddo's `nearest_n(2)` costs 1.8× its `nearest_one` in
-//! instructions, and neither breaks ties by node id), so [`nearest_visit`] walks the
-//! archived layout itself: stems in Eytzinger order (root 1, children `2s` and
-//! `2s + 1`, split dimension `level % 3`, right when `c[dim] >= pivot`), leaf
-//! `s - 2^levels` at the bottom, leaves as tiles of x's, y's, z's and items.
-//!
-//! # Safety of archived trees
-//! rkyv's bytecheck validates an archived kiddo tree's *structure*: every relative
-//! pointer and length stays inside the buffer, buffers are 128-byte aligned, the
-//! stem/leaf resolution enum has a known tag. kiddo's queries also rely on facts that
-//! bytecheck cannot see: the stem array covers every level the traversal descends, each
-//! leaf extent lies inside the leaf arena (leaves are read through raw pointers), the
-//! arithmetic leaf index stays below the leaf count (kiddo panics otherwise), and no
-//! distance is NaN (kiddo sorts results with a comparator that treats NaN as equal,
-//! which a sort may reject with a panic). [`check_tree`] reads those fields through
-//! `TreeLayout`, a `#[repr(C)]` mirror of kiddo 6.3's archived layout (pinned by a size
-//! assertion and by `layout_mirror_reads_what_kiddo_reads`), and checks them once per
-//! segment; it also checks that every item is in range. The pass reads the leaf arena
-//! once (16 bytes per point). [`nearest_visit`] indexes only with bounds-checked slices.
+//! instructions, and neither breaks ties by node id), so the nearest walk
+//! (`super::walk`) reads the archived layout itself through [`ArchivedTreeAccess`]:
+//! stems in Eytzinger order (root 1, children `2s` and `2s + 1`, split dimension
+//! `level % 3`, above when `c[dim] >= pivot`), leaf `s - 2^levels` at the bottom, leaves
+//! as tiles of x's, y's, z's and items. The layout is read through the checked mirror
+//! of `super::archived_layout`; the walk indexes only with bounds-checked slices.
 
 #![allow(
     unsafe_code,
-    reason = "reading the fields of a validated archived kiddo tree through a layout mirror"
+    reason = "re-deriving a reader-built tree from the bytes it was archived into"
 )]
 
-use super::SpatialIndex;
-use crate::snapshot::SegmentBytes;
+use super::archived_layout::{ArchivedKdTree, KdTree, layout, tile_widths};
+use super::spatial_index::{SpatialIndex, prefetch};
+use super::walk::{self, Cell, KdTreeAccessor, TileVisitor};
+use crate::bytes::{SegmentBytes, archive};
 use crate::{NodeId, Point};
-use kiddo::leaf_strategy::VecOfArenas;
-use kiddo::{Eytzinger, ImmutableKdTree, SquaredEuclidean};
-use rkyv::boxed::ArchivedBox;
-use rkyv::primitive::{ArchivedI32, ArchivedUsize};
-use rkyv::rend::f32_le;
+use kiddo::SquaredEuclidean;
+use rkyv::primitive::ArchivedUsize;
 use rkyv::tuple::ArchivedTuple2;
-use rkyv::vec::ArchivedVec;
-
-/// The kd-tree of archived and reader-built indexes: kiddo's `ImmutableKdTree` over
-/// `f32` points in 3-D with `u32` items.
-pub type KdTree = ImmutableKdTree<f32, 3>;
-
-/// kiddo's archived form of [`KdTree`], queried in place.
-pub type ArchivedKdTree =
-    kiddo::kd_tree::ArchivedKdTree<f32, u32, Eytzinger, VecOfArenas<f32, u32, 3, 32>, 3, 32>;
 
 /// Radius queries on kiddo trees ask for this much more (relative) and filter exactly:
 /// kiddo updates its pruning bound incrementally, which can round a few ulps high.
@@ -60,129 +37,6 @@ const PREFETCH_MIN_LEVELS: u32 = 14;
 /// Builds a [`KdTree`] over `(item, point)` entries.
 pub(crate) fn build_tree(entries: &[(u32, Point)]) -> KdTree {
     KdTree::new_from_entries(entries).expect("u32 items are given, none is generated")
-}
-
-/// Branch-and-bound nearest search over a tree that passed [`check_tree`] (see
-/// [`SpatialIndex::nearest_visit`]): nearer cells first, cells farther than the bound
-/// skipped, pruning bounds evaluated like [`distance_squared`] so that they never
-/// exceed the distance of a point they prune.
-pub(crate) fn nearest_visit<F: FnMut(f32, u32) -> f32>(tree: &ArchivedKdTree, c: &Point, f: F) {
-    let l = layout(tree);
-    if l.size.to_native() == 0 {
-        return;
-    }
-    let bytes = l.leaves.leaf_bytes.get();
-    let Ok(words) = bytemuck::try_cast_slice::<u8, u32>(&bytes[..bytes.len() / 4 * 4]) else {
-        return; // `check_tree` guarantees 128-byte alignment
-    };
-    let mut walk = Walk {
-        stems: bytemuck::cast_slice(l.stems.get()),
-        extents: l.leaves.leaf_extents.as_slice(),
-        words,
-        levels: (l.max_stem_level.to_native() + 1).max(0) as u32,
-        c,
-        bound: f32::INFINITY,
-        f,
-    };
-    walk.descend(1, 0, [0.0; 3]);
-}
-
-struct Walk<'a, F> {
-    stems: &'a [f32],
-    extents: &'a [ArchivedTuple2<ArchivedUsize, ArchivedUsize>],
-    words: &'a [u32],
-    levels: u32,
-    c: &'a Point,
-    bound: f32,
-    f: F,
-}
-
-impl<F: FnMut(f32, u32) -> f32> Walk<'_, F> {
-    /// Depth-first from stem `s` at `level` (cell offsets `off` from the query), nearer
-    /// child first; the farther child only if its cell is within the bound by then.
-    /// Recursion (at most 31 deep: `check_tree` bounds the levels by 30) costs less than
-    /// an explicit stack here: no far cell is stored that the bound later prunes.
-    fn descend(&mut self, s: usize, level: u32, off: [f32; 3]) {
-        if level >= self.levels {
-            self.leaf(s - (1 << self.levels));
-            return;
-        }
-        let dim = (level % 3) as usize;
-        let delta = self.c[dim] - self.stems[s];
-        let right = usize::from(delta >= 0.0);
-        let near = 2 * s + right;
-        // Eytzinger order puts the children of `near` at `2 near`, `2 near + 1` and its 16
-        // descendants four levels down at `16 near..16 near + 16` (one cache line of
-        // stems): ask for both now, as kiddo's own descent does, so that the loads of the
-        // levels below overlap this one's (at 10M points this took the walk from 1.3× to
-        // 1.0× kiddo's `nearest_one`). Small trees sit in cache, where the hints would
-        // only cost instructions.
-        if self.levels >= PREFETCH_MIN_LEVELS {
-            let stems = self.stems.as_ptr();
-            super::prefetch(stems.wrapping_add(near.wrapping_mul(2)));
-            super::prefetch(stems.wrapping_add(near.wrapping_mul(16)));
-        }
-        self.descend(near, level + 1, off);
-        let mut far_off = off;
-        far_off[dim] = delta.abs();
-        if super::live::cell_distance_squared(&far_off) <= self.bound {
-            self.descend(near ^ 1, level + 1, far_off);
-        }
-    }
-
-    fn leaf(&mut self, leaf: usize) {
-        let e = &self.extents[leaf];
-        let (start, len) = (e.0.to_native() as usize / 4, e.1.to_native() as usize);
-        let Some(mut rest) = self.words.get(start..start + 4 * len) else {
-            return; // `check_tree` keeps every extent inside the arena
-        };
-        let mut remaining = len;
-        while remaining > 0 {
-            let w = TILE_WIDTHS
-                .into_iter()
-                .find(|&w| remaining >= w)
-                .expect("width 1 fits any remaining > 0");
-            let (tile, tail) = rest.split_at(4 * w);
-            match w {
-                32 => self.tile::<32>(tile),
-                8 => self.tile::<8>(tile),
-                4 => self.tile::<4>(tile),
-                2 => self.tile::<2>(tile),
-                _ => self.tile::<1>(tile),
-            }
-            rest = tail;
-            remaining -= w;
-        }
-    }
-
-    /// One tile of `W` points: `W` x's, `W` y's, `W` z's, `W` items (fixed width, so the
-    /// distance loop vectorises).
-    #[inline]
-    fn tile<const W: usize>(&mut self, tile: &[u32]) {
-        let word =
-            |i: usize| -> Option<&[u32; W]> { tile.get(i * W..(i + 1) * W)?.try_into().ok() };
-        let (Some(xs), Some(ys), Some(zs), Some(items)) = (word(0), word(1), word(2), word(3))
-        else {
-            return;
-        };
-        let c = *self.c;
-        // The same expression as `distance_squared`, for the whole tile.
-        let mut d = [0.0f32; W];
-        for i in 0..W {
-            let dx = f32::from_bits(xs[i]) - c[0];
-            let dy = f32::from_bits(ys[i]) - c[1];
-            let dz = f32::from_bits(zs[i]) - c[2];
-            d[i] = dx * dx + dy * dy + dz * dz;
-        }
-        let bound = self.bound;
-        if d.iter().fold(false, |hit, &x| hit | (x <= bound)) {
-            for i in 0..W {
-                if d[i] <= self.bound {
-                    self.bound = (self.f)(d[i], items[i]);
-                }
-            }
-        }
-    }
 }
 
 /// Points within `r2` of `c` through kiddo's `within` query (with a margin, filtered
@@ -201,6 +55,106 @@ fn within<F: FnMut(f32, u32, &Point)>(tree: &ArchivedKdTree, c: &Point, r2: f32,
                 f(r.distance, r.item, &r.point);
             }
         });
+}
+
+/// Read access to the stems and leaves of an archived tree that passed [`check_tree`],
+/// for the nearest walk (see the module docs for the layout).
+struct ArchivedTreeAccess<'a> {
+    stems: &'a [f32],
+    extents: &'a [ArchivedTuple2<ArchivedUsize, ArchivedUsize>],
+    words: &'a [u32],
+    levels: u32,
+}
+
+impl<'a> ArchivedTreeAccess<'a> {
+    /// The tree's stems and leaves, or `None` for an empty tree (never walked).
+    fn new(tree: &'a ArchivedKdTree) -> Option<Self> {
+        let l = layout(tree);
+        if l.size.to_native() == 0 {
+            return None;
+        }
+        let bytes = l.leaves.leaf_bytes.get();
+        // `check_tree` guarantees 128-byte alignment.
+        let words = bytemuck::try_cast_slice::<u8, u32>(&bytes[..bytes.len() / 4 * 4]).ok()?;
+        Some(ArchivedTreeAccess {
+            stems: bytemuck::cast_slice(l.stems.get()),
+            extents: l.leaves.leaf_extents.as_slice(),
+            words,
+            levels: (l.max_stem_level.to_native() + 1).max(0) as u32,
+        })
+    }
+}
+
+/// Nodes are `(stem index, level)`; at the bottom level, `(leaf index, level)`.
+impl KdTreeAccessor for ArchivedTreeAccess<'_> {
+    type Node = (usize, u32);
+
+    #[inline]
+    fn root(&self) -> Option<(usize, u32)> {
+        Some((1, 0))
+    }
+
+    #[inline]
+    fn cell(&self, (s, level): (usize, u32)) -> Cell<(usize, u32)> {
+        if level >= self.levels {
+            return Cell::Leaf((s - (1 << self.levels), level));
+        }
+        Cell::Inner {
+            dim: (level % 3) as usize,
+            split: self.stems[s],
+            below: (2 * s, level + 1),
+            above: (2 * s + 1, level + 1),
+        }
+    }
+
+    /// Eytzinger order puts the children of `s` at `2s`, `2s + 1` and its 16
+    /// descendants four levels down at `16s..16s + 16` (one cache line of stems): ask
+    /// for both, as kiddo's own descent does, so that the loads of the levels below
+    /// overlap this one's (at 10M points this took the walk from 1.3× to 1.0× kiddo's
+    /// `nearest_one`). Small trees sit in cache, where the hints would only cost
+    /// instructions.
+    #[inline]
+    fn descending_into(&self, (s, _): (usize, u32)) {
+        if self.levels >= PREFETCH_MIN_LEVELS {
+            let stems = self.stems.as_ptr();
+            prefetch(stems.wrapping_add(s.wrapping_mul(2)));
+            prefetch(stems.wrapping_add(s.wrapping_mul(16)));
+        }
+    }
+
+    /// The leaf's tiles, widest first (see `tile_widths`).
+    #[inline]
+    fn visit_leaf<V: TileVisitor>(&self, (leaf, _): (usize, u32), visitor: &mut V) {
+        let e = &self.extents[leaf];
+        let (start, len) = (e.0.to_native() as usize / 4, e.1.to_native() as usize);
+        let Some(mut rest) = self.words.get(start..start + 4 * len) else {
+            return; // `check_tree` keeps every extent inside the arena
+        };
+        for w in tile_widths(len) {
+            let (tile, tail) = rest.split_at(4 * w);
+            match w {
+                32 => visit_tile::<32, V>(tile, visitor),
+                8 => visit_tile::<8, V>(tile, visitor),
+                4 => visit_tile::<4, V>(tile, visitor),
+                2 => visit_tile::<2, V>(tile, visitor),
+                _ => visit_tile::<1, V>(tile, visitor),
+            }
+            rest = tail;
+        }
+    }
+}
+
+/// One tile of `W` points (`W` x's, `W` y's, `W` z's, `W` items) passed to `visitor`.
+#[inline]
+fn visit_tile<const W: usize, V: TileVisitor>(tile: &[u32], visitor: &mut V) {
+    let coords: &[f32] = bytemuck::cast_slice(tile);
+    let coord = |i: usize| -> Option<&[f32; W]> { coords.get(i * W..(i + 1) * W)?.try_into().ok() };
+    let items = tile
+        .get(3 * W..4 * W)
+        .and_then(|s| <&[u32; W]>::try_from(s).ok());
+    if let (Some(xs), Some(ys), Some(zs), Some(items)) = (coord(0), coord(1), coord(2), items) {
+        visitor.tile(xs, ys, zs, items, W);
+    }
 }
 
 /// A kd-tree index a reader built from any [`crate::SceneView`] (see
@@ -223,10 +177,10 @@ impl std::fmt::Debug for KdIndex {
 
 impl KdIndex {
     pub(crate) fn new(tree: &KdTree, ids: Vec<NodeId>) -> Self {
-        let bytes =
-            rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(tree, SegmentBytes::new())
-                .expect("serializing a kd-tree into memory cannot fail");
-        KdIndex { bytes, ids }
+        KdIndex {
+            bytes: archive(tree),
+            ids,
+        }
     }
 
     fn index(&self) -> ArchivedIndex<'_> {
@@ -249,7 +203,7 @@ impl SpatialIndex for KdIndex {
     }
 
     fn prefetch_node(&self, item: u32) {
-        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
+        prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
@@ -300,11 +254,13 @@ impl SpatialIndex for ArchivedIndex<'_> {
     }
 
     fn prefetch_node(&self, item: u32) {
-        super::prefetch(self.ids.as_ptr().wrapping_add(item as usize));
+        prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
     fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
-        nearest_visit(self.tree, c, f);
+        if let Some(access) = ArchivedTreeAccess::new(self.tree) {
+            walk::nearest_visit(&access, c, f);
+        }
     }
 
     fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F) {
@@ -321,158 +277,18 @@ impl SpatialIndex for ArchivedIndex<'_> {
     }
 }
 
-// ---- validation ----------------------------------------------------------------------
-
-/// kiddo 6.3's archived `VecOfArenas<f32, u32, 3, 32>`, field for field.
-#[repr(C)]
-struct ArenasLayout {
-    leaf_extents: ArchivedVec<ArchivedTuple2<ArchivedUsize, ArchivedUsize>>,
-    leaf_bytes: ArchivedBox<[u8]>,
-    size: ArchivedUsize,
-}
-
-/// kiddo 6.3's archived `OwnedStemLeafResolution`: a `repr(u8)` enum, laid out as a tag
-/// followed by the variant's fields. Tag 0 is `Arithmetic { stems_depth, leaf_count }`;
-/// the largest variant, `Mapped { usize, Vec<usize> }`, sets the size.
-#[repr(C)]
-struct ResolutionLayout {
-    tag: u8,
-    stems_depth: ArchivedUsize,
-    leaf_count: ArchivedUsize,
-    _mapped_tail: ArchivedUsize,
-}
-
-/// kiddo 6.3's archived `KdTree<f32, u32, Eytzinger, VecOfArenas<..>, 3, 32>`, field for
-/// field (`AlignedArchiveSlice<[T]>` has the layout and metadata of `[T]`).
-#[repr(C)]
-struct TreeLayout {
-    stems: ArchivedBox<[f32_le]>,
-    leaves: ArenasLayout,
-    resolution: ResolutionLayout,
-    size: ArchivedUsize,
-    max_stem_level: ArchivedI32,
-    max_leaf_len: ArchivedUsize,
-}
-
-const _: () = assert!(
-    std::mem::size_of::<TreeLayout>() == std::mem::size_of::<ArchivedKdTree>()
-        && std::mem::align_of::<TreeLayout>() == std::mem::align_of::<ArchivedKdTree>()
-);
-
-/// The archived tree's fields, read through the layout mirror.
-fn layout(tree: &ArchivedKdTree) -> &TreeLayout {
-    // SAFETY: `TreeLayout` declares the fields of kiddo 6.3's archived tree in order,
-    // with the same archived field types (rkyv derives `#[repr(C)]` archived structs,
-    // and a `repr(u8)` enum is a tag followed by the variant's `repr(C)` fields); sizes
-    // and alignments are asserted equal above, and `layout_mirror_reads_what_kiddo_reads`
-    // checks the fields read here against kiddo's own accessors. Every `ArchivedKdTree`
-    // reference we hold points into bytes that bytecheck validated, so each mirrored
-    // field holds a valid value (relative pointers in bounds, initialised integers).
-    unsafe { &*(tree as *const ArchivedKdTree).cast::<TreeLayout>() }
-}
-
-/// Leaf tiles, widest first, as kiddo's `VecOfArenas` encodes a leaf: each tile of width
-/// `w` holds `w` x's, `w` y's, `w` z's, then `w` items (16 bytes per point).
-const TILE_WIDTHS: [usize; 5] = [32, 8, 4, 2, 1];
-
-/// Checks what kiddo's queries rely on and bytecheck does not verify (see the module
-/// docs), and that every item is below `items`. Linear in the number of points.
-///
-/// # Errors
-/// A description of the first problem.
-pub(crate) fn check_tree(tree: &ArchivedKdTree, items: usize) -> Result<(), String> {
-    let l = layout(tree);
-    let size = l.size.to_native() as usize;
-    if size == 0 {
-        return Ok(()); // never queried: every query returns at once on an empty tree
-    }
-    if l.resolution.tag != 0 {
-        return Err("kd-tree leaf resolution is not arithmetic".into());
-    }
-    let depth = l.resolution.stems_depth.to_native() as usize;
-    let leaf_count = l.resolution.leaf_count.to_native() as usize;
-    let extents = l.leaves.leaf_extents.as_slice();
-    if depth > 30
-        || leaf_count != 1 << depth
-        || extents.len() != leaf_count
-        || !(-1..depth as i32).contains(&l.max_stem_level.to_native())
-    {
-        return Err(format!(
-            "kd-tree shape: depth {depth}, {leaf_count} leaves, {} extents, max stem level {}",
-            extents.len(),
-            l.max_stem_level.to_native()
-        ));
-    }
-    // Levels 0..=max_stem_level are read, at stem indices below 2^(max_stem_level + 1).
-    let stem_levels = (l.max_stem_level.to_native() + 1) as u32;
-    let stems = l.stems.get();
-    let bytes = l.leaves.leaf_bytes.get();
-    let misaligned = |len: usize, ptr: usize| len > 0 && !ptr.is_multiple_of(128);
-    if stems.len() < (1usize << stem_levels) - usize::from(stem_levels == 0)
-        || misaligned(stems.len(), stems.as_ptr() as usize)
-        || misaligned(bytes.len(), bytes.as_ptr() as usize)
-    {
-        return Err("kd-tree stems too short or buffers misaligned".into());
-    }
-    if l.leaves.size.to_native() as usize != size {
-        return Err("kd-tree leaf size differs from tree size".into());
-    }
-    let max_leaf = l.max_leaf_len.to_native() as usize;
-    let mut total = 0usize;
-    for e in extents {
-        let (off, len) = (e.0.to_native() as usize, e.1.to_native() as usize);
-        let end = len.checked_mul(16).and_then(|n| n.checked_add(off));
-        if off % 4 != 0 || len > max_leaf || end.is_none_or(|end| end > bytes.len()) {
-            return Err(format!("kd-tree leaf extent {off}+{len} out of bounds"));
-        }
-        total += len;
-        check_leaf(&bytes[off..off + 16 * len], len, items)?;
-    }
-    if total != size {
-        return Err(format!(
-            "kd-tree leaves hold {total} points, size says {size}"
-        ));
-    }
-    Ok(())
-}
-
-fn check_leaf(mut bytes: &[u8], len: usize, items: usize) -> Result<(), String> {
-    let mut remaining = len;
-    while remaining > 0 {
-        let w = TILE_WIDTHS
-            .into_iter()
-            .find(|&w| remaining >= w)
-            .expect("width 1 fits any remaining > 0");
-        let (coords, rest) = bytes.split_at(12 * w);
-        let (item_bytes, rest) = rest.split_at(4 * w);
-        if coords
-            .chunks_exact(4)
-            .any(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]).is_nan())
-        {
-            return Err("kd-tree leaf holds a NaN coordinate".into());
-        }
-        if item_bytes
-            .chunks_exact(4)
-            .any(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as usize >= items)
-        {
-            return Err(format!(
-                "kd-tree leaf holds an item out of range (< {items})"
-            ));
-        }
-        bytes = rest;
-        remaining -= w;
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::distance_squared;
+    use crate::index::check_tree;
     use rand::{Rng, SeedableRng};
 
-    fn archive(tree: &KdTree) -> SegmentBytes {
-        rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(tree, SegmentBytes::new()).unwrap()
+    /// The nearest walk over an archived tree.
+    fn nearest_visit(tree: &ArchivedKdTree, c: &Point, f: impl FnMut(f32, u32) -> f32) {
+        if let Some(access) = ArchivedTreeAccess::new(tree) {
+            walk::nearest_visit(&access, c, f);
+        }
     }
 
     /// Every point with its squared distance, through `nearest_visit` with no pruning.
@@ -506,9 +322,8 @@ mod tests {
         let bytes = l.leaves.leaf_bytes.get();
         let mut out = Vec::new();
         for e in l.leaves.leaf_extents.iter() {
-            let (mut off, mut remaining) = (e.0.to_native() as usize, e.1.to_native() as usize);
-            while remaining > 0 {
-                let w = TILE_WIDTHS.into_iter().find(|&w| remaining >= w).unwrap();
+            let (mut off, len) = (e.0.to_native() as usize, e.1.to_native() as usize);
+            for w in tile_widths(len) {
                 let word = |i: usize| {
                     u32::from_le_bytes(bytes[off + 4 * i..off + 4 * i + 4].try_into().unwrap())
                 };
@@ -516,7 +331,6 @@ mod tests {
                     out.push((word(3 * w + j), [word(j), word(w + j), word(2 * w + j)]));
                 }
                 off += 16 * w;
-                remaining -= w;
             }
         }
         out.sort_unstable();

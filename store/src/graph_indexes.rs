@@ -1,5 +1,5 @@
-//! Live indexes of a [`SceneGraph`]: enabling and disabling them, the hooks every
-//! mutation calls to keep them exact, and what the snapshot archives.
+//! The live spatial indexes of a [`SceneGraph`]: enabling and disabling them, and the
+//! hooks every mutation calls to keep them exact.
 //!
 //! # Invariants (checked by [`SceneGraph::check_indexes`])
 //! - A layer index holds exactly one live entry `(point, handle(node))` per point of
@@ -14,18 +14,12 @@
 //! A node index changes when any node below its root changes, so the hooks touch the
 //! root's layer: a node index is republished with its root's layer.
 
-use super::live::Located;
-use super::overlay::OverlaidTree;
-use super::{LiveIndex, LiveKdTree, build_tree};
+use crate::change::Change;
 use crate::error::{EditResult, GraphEditError};
-use crate::graph::{Change, Node};
-use crate::snapshot::{LayerSegment, NodeIndexSegment};
+use crate::graph::Node;
+use crate::index::{Entry, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
 use crate::{LayerId, NodeId, Point, SceneGraph};
-use rustc_hash::FxHashMap;
-use std::collections::BTreeMap;
 
-/// `Node::index_handle` of a node without a handle.
-const NO_HANDLE: u32 = u32::MAX;
 /// An update that walks between 2 and this many tree paths locates them first, all at
 /// once (see [`LiveKdTree::locate`]), if its trees hold at least
 /// [`WARM_MIN_ENTRIES`] entries together. Larger updates are bulk edits that gain
@@ -36,73 +30,6 @@ const NO_HANDLE: u32 = u32::MAX;
 const WARM_LIMIT: usize = 32;
 /// See [`WARM_LIMIT`]: 2^17 entries are 2.5 MB of leaves, well past a 512 KiB L2 cache.
 const WARM_MIN_ENTRIES: usize = 1 << 17;
-
-/// The live indexes of a graph and the node handles their items use.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct LiveIndexes {
-    ids: Vec<NodeId>,
-    free: Vec<u32>,
-    layers: BTreeMap<LayerId, OverlaidTree>,
-    nodes: FxHashMap<NodeId, OverlaidTree>,
-}
-
-impl LiveIndexes {
-    fn is_empty(&self) -> bool {
-        self.layers.is_empty() && self.nodes.is_empty()
-    }
-
-    /// The handle of `node`, allocated on first use.
-    fn handle(&mut self, node: &mut Node) -> u32 {
-        if node.index_handle != NO_HANDLE {
-            return node.index_handle;
-        }
-        let h = match self.free.pop() {
-            Some(h) => {
-                self.ids[h as usize] = node.id;
-                h
-            }
-            None => {
-                if self.ids.len() == self.ids.capacity() {
-                    // Grow by an eighth rather than double: the table costs 8 bytes per
-                    // indexed node, and doubling would leave up to as much again unused.
-                    self.ids.reserve_exact(self.ids.len() / 8 + 8);
-                }
-                self.ids.push(node.id);
-                u32::try_from(self.ids.len() - 1).expect("fewer than 2^32 indexed nodes")
-            }
-        };
-        node.index_handle = h;
-        h
-    }
-
-    /// Makes room for `n` more handles at once (exactly, so that enabling an index
-    /// over many nodes leaves no slack in the table).
-    fn reserve_handles(&mut self, n: usize) {
-        self.ids.reserve_exact(n.saturating_sub(self.free.len()));
-    }
-
-    fn release(&mut self, node: &Node) {
-        if node.index_handle != NO_HANDLE {
-            self.ids[node.index_handle as usize] = NodeId::NONE;
-            self.free.push(node.index_handle);
-        }
-    }
-
-    /// The index of `layer`, if enabled.
-    pub(crate) fn layer(&self, layer: LayerId) -> Option<LiveIndex<'_>> {
-        self.layers
-            .get(&layer)
-            .map(|t| LiveIndex::new(t, &self.ids))
-    }
-
-    /// The index of `node`'s sub-tree, if enabled.
-    pub(crate) fn node(&self, node: NodeId) -> Option<LiveIndex<'_>> {
-        if self.nodes.is_empty() {
-            return None;
-        }
-        self.nodes.get(&node).map(|t| LiveIndex::new(t, &self.ids))
-    }
-}
 
 impl SceneGraph {
     /// Enables the layer index of `layer`: a kd-tree over every point of the layer, kept
@@ -136,12 +63,8 @@ impl SceneGraph {
         for id in &l.nodes {
             let node = self.nodes.get_mut(id).expect("listed");
             if !node.points.is_empty() {
-                let h = self.indexes.handle(node);
-                entries.extend(
-                    node.points
-                        .iter()
-                        .map(|&p| super::live::Entry { p, item: h }),
-                );
+                let h = self.indexes.handle(node.id, &mut node.index_handle);
+                entries.extend(node.points.iter().map(|&p| Entry { p, item: h }));
             }
         }
         self.indexes
@@ -199,14 +122,8 @@ impl SceneGraph {
         self.indexes.reserve_handles(unhandled);
         let mut entries = Vec::new();
         for (id, points) in members {
-            let h = self
-                .indexes
-                .handle(self.nodes.get_mut(&id).expect("member"));
-            entries.extend(
-                points
-                    .into_iter()
-                    .map(|p| super::live::Entry { p, item: h }),
-            );
+            let h = self.index_handle_of(id);
+            entries.extend(points.into_iter().map(|p| Entry { p, item: h }));
         }
         self.indexes
             .nodes
@@ -231,8 +148,14 @@ impl SceneGraph {
         Ok(())
     }
 
+    /// The index handle of node `id` (which exists), allocated on first use.
+    fn index_handle_of(&mut self, id: NodeId) -> u32 {
+        let node = self.nodes.get_mut(&id).expect("indexed node exists");
+        self.indexes.handle(id, &mut node.index_handle)
+    }
+
     /// The nodes with points in `root`'s sub-tree, with their points.
-    fn indexed_members(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
+    pub(crate) fn indexed_members(&self, root: NodeId) -> Vec<(NodeId, Vec<Point>)> {
         let mut out = Vec::new();
         let mut stack = vec![root];
         while let Some(id) = stack.pop() {
@@ -272,9 +195,7 @@ impl SceneGraph {
         if roots.is_empty() && !has_layer {
             return;
         }
-        let h = self
-            .indexes
-            .handle(self.nodes.get_mut(&id).expect("changed node"));
+        let h = self.index_handle_of(id);
         let new = &self.nodes[&id].points;
         let (removed, added) = crate::id::changed_points(old, new);
         let per_tree = removed.len() + added.len();
@@ -332,9 +253,7 @@ impl SceneGraph {
             .indexed_members(child)
             .into_iter()
             .map(|(id, points)| {
-                let h = self
-                    .indexes
-                    .handle(self.nodes.get_mut(&id).expect("member"));
+                let h = self.index_handle_of(id);
                 (h, points)
             })
             .collect();
@@ -363,64 +282,12 @@ impl SceneGraph {
         {
             t.apply(node.index_handle, &node.points, &[], None);
         }
-        self.indexes.release(node);
+        self.indexes.release(node.index_handle);
     }
 
     /// Hook: `layer` is being removed (before its nodes are).
     pub(crate) fn index_layer_removed(&mut self, layer: LayerId) {
         self.indexes.layers.remove(&layer);
-    }
-
-    /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of
-    /// `segment` (the layer's columns) whose items are rows.
-    pub(crate) fn archived_layer_index(
-        &self,
-        layer: LayerId,
-        segment: &LayerSegment,
-    ) -> Option<crate::index::KdTree> {
-        self.indexes.layers.get(&layer)?;
-        let mut entries = Vec::with_capacity(segment.points.len());
-        for (row, w) in segment.point_offsets.windows(2).enumerate() {
-            entries.extend(
-                segment.points[w[0] as usize..w[1] as usize]
-                    .iter()
-                    .map(|p| (row as u32, *p)),
-            );
-        }
-        Some(build_tree(&entries))
-    }
-
-    /// The node indexes rooted in `layer` for a snapshot, ascending by root: items are
-    /// positions in each index's sorted id table.
-    pub(crate) fn archived_node_indexes(&self, layer: LayerId) -> Vec<NodeIndexSegment> {
-        let mut roots: Vec<NodeId> = self
-            .indexes
-            .nodes
-            .keys()
-            .copied()
-            .filter(|r| self.nodes[r].layer == layer)
-            .collect();
-        roots.sort_unstable();
-        roots
-            .into_iter()
-            .map(|root| self.archived_node_index(root))
-            .collect()
-    }
-
-    /// The node index rooted at `root` for a snapshot (`root` must have one): items are
-    /// positions in its sorted id table.
-    pub(crate) fn archived_node_index(&self, root: NodeId) -> NodeIndexSegment {
-        let mut members = self.indexed_members(root);
-        members.sort_unstable_by_key(|m| m.0);
-        let mut entries = Vec::new();
-        for (i, (_, points)) in members.iter().enumerate() {
-            entries.extend(points.iter().map(|p| (i as u32, *p)));
-        }
-        NodeIndexSegment {
-            root: root.0,
-            ids: members.iter().map(|m| m.0.0).collect(),
-            tree: build_tree(&entries),
-        }
     }
 
     /// Checks the invariants in the module docs: every live index holds exactly the

@@ -1,0 +1,387 @@
+//! Archiving the live graph: [`SceneGraph::layer_segment`], [`SceneGraph::manifest`],
+//! [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
+//! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
+
+use super::schema::{
+    FORMAT_VERSION, LayerSegment, Manifest, ManifestLayer, NO_PARENT, NodeIndexSegment,
+};
+use crate::bytes::{SegmentBytes, archive};
+use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
+use crate::index::{KdTree, build_tree};
+use crate::{LayerId, Node, NodeId, SceneGraph, SnapshotError};
+use rkyv::Serialize;
+
+/// Maps graph symbols to indexes in a layer segment's string table.
+#[derive(Debug, Default)]
+pub(crate) struct StringTable {
+    index: rustc_hash::FxHashMap<u32, u32>,
+}
+
+impl StringTable {
+    /// The index of `sym` in `strings`, appending the string on first use.
+    fn get(&mut self, g: &SceneGraph, sym: u32, strings: &mut Vec<String>) -> u32 {
+        *self.index.entry(sym).or_insert_with(|| {
+            strings.push(g.strings.resolve(sym).to_owned());
+            (strings.len() - 1) as u32
+        })
+    }
+}
+
+fn push_offset(offsets: &mut Vec<u32>, len: usize) {
+    offsets.push(u32::try_from(len).expect("a layer column holds fewer than 2^32 entries"));
+}
+
+impl LayerSegment {
+    /// A segment with no rows yet: header fields set, every offset column at `[0]`.
+    pub(crate) fn empty(layer: LayerId, generation: u64, name: &str, rows: usize) -> Self {
+        let mut s = LayerSegment {
+            version: FORMAT_VERSION,
+            layer: layer.0,
+            generation,
+            name: name.to_owned(),
+            ..Default::default()
+        };
+        for o in s.offset_columns_mut() {
+            o.reserve(rows + 1);
+            o.push(0);
+        }
+        s.parents.reserve(rows);
+        s
+    }
+
+    /// The CSR offset columns.
+    fn offset_columns_mut(&mut self) -> [&mut Vec<u32>; 6] {
+        [
+            &mut self.point_offsets,
+            &mut self.child_offsets,
+            &mut self.out_offsets,
+            &mut self.in_offsets,
+            &mut self.label_offsets,
+            &mut self.feature_offsets,
+        ]
+    }
+
+    /// Rebuilds the label and key postings from the label and feature-key columns.
+    pub(crate) fn rebuild_postings(&mut self) {
+        let rows = self.ids.len();
+        for (offsets, terms, index, postings) in [
+            (
+                &self.label_offsets,
+                &self.labels,
+                &mut self.label_index,
+                &mut self.label_postings,
+            ),
+            (
+                &self.feature_offsets,
+                &self.feature_keys,
+                &mut self.key_index,
+                &mut self.key_postings,
+            ),
+        ] {
+            let mut rows_by_term: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+            for row in 0..rows {
+                for &term in &terms[offsets[row] as usize..offsets[row + 1] as usize] {
+                    rows_by_term.entry(term).or_default().push(row as u32);
+                }
+            }
+            index.clear();
+            postings.clear();
+            for (term, rows) in rows_by_term {
+                let start = postings.len() as u32;
+                postings.extend(rows);
+                index.insert(
+                    self.strings[term as usize].clone(),
+                    [start, postings.len() as u32],
+                );
+            }
+        }
+    }
+}
+
+impl SceneGraph {
+    /// Builds the archived columns of one layer.
+    ///
+    /// # Panics
+    /// If `layer` does not exist.
+    pub fn layer_segment(&self, layer: LayerId) -> LayerSegment {
+        self.build_layer_segment(layer).0
+    }
+
+    /// [`SceneGraph::layer_segment`], also returning the symbol map of its string table.
+    pub(crate) fn build_layer_segment(&self, layer: LayerId) -> (LayerSegment, StringTable) {
+        let l = &self.layers[&layer];
+        let mut ids: Vec<u64> = l.nodes.iter().map(|n| n.0).collect();
+        ids.sort_unstable();
+        let mut st = StringTable::default();
+        let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
+        for (row, &id) in ids.iter().enumerate() {
+            self.push_row(&mut s, &mut st, &self.nodes[&NodeId(id)], row as u32, &ids);
+        }
+        s.ids = ids;
+        s.rebuild_postings();
+        s.layer_index = self.archived_layer_index(layer, &s);
+        s.node_indexes = self.archived_node_indexes(layer);
+        (s, st)
+    }
+
+    /// Appends node `n` as row `row` to every per-row column of `s` (not `ids`, the
+    /// postings or the spatial indexes). `ids` are the segment's sorted node ids, for
+    /// edge rows.
+    pub(crate) fn push_row(
+        &self,
+        s: &mut LayerSegment,
+        st: &mut StringTable,
+        n: &Node,
+        row: u32,
+        ids: &[u64],
+    ) {
+        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
+        s.points.extend_from_slice(&n.points);
+        push_offset(&mut s.point_offsets, s.points.len());
+        s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
+        s.children.extend(n.children.iter().map(|c| c.0));
+        push_offset(&mut s.child_offsets, s.children.len());
+        for &(t, d) in &n.out_edges {
+            s.out_targets.push(row_of(t));
+            s.out_descriptions.push(st.get(self, d, &mut s.strings));
+        }
+        push_offset(&mut s.out_offsets, s.out_targets.len());
+        for &(src, d) in &n.in_edges {
+            s.in_sources.push(row_of(src));
+            s.in_descriptions.push(st.get(self, d, &mut s.strings));
+        }
+        push_offset(&mut s.in_offsets, s.in_sources.len());
+        for &lab in &n.labels {
+            s.labels.push(st.get(self, lab, &mut s.strings));
+        }
+        push_offset(&mut s.label_offsets, s.labels.len());
+        for &(k, v) in &n.features {
+            s.feature_keys.push(st.get(self, k, &mut s.strings));
+            let (kind, bits) = match v {
+                StoredValue::Str(sym) => {
+                    (FEATURE_STR, u64::from(st.get(self, sym, &mut s.strings)))
+                }
+                StoredValue::Int(v) => (FEATURE_INT, v as u64),
+                StoredValue::Float(v) => (FEATURE_FLOAT, v.to_bits()),
+                StoredValue::Bool(v) => (FEATURE_BOOL, u64::from(v)),
+            };
+            s.feature_kinds.push(kind);
+            s.feature_bits.push(bits);
+        }
+        push_offset(&mut s.feature_offsets, s.feature_keys.len());
+        if let (true, Some(b)) = (n.bbox_enabled, n.aabb) {
+            s.aabb_rows.push(row);
+            s.aabbs.push(b.to_array());
+        }
+    }
+
+    /// Builds the manifest of the current graph (every layer at its current generation).
+    pub fn manifest(&self, generation: u64) -> Manifest {
+        let layers = self
+            .layers
+            .iter()
+            .map(|(&id, l)| {
+                let mut parents: Vec<u32> = l.parents.iter().map(|p| p.0).collect();
+                let mut children: Vec<u32> = l.children.iter().map(|c| c.0).collect();
+                parents.sort_unstable();
+                children.sort_unstable();
+                let (min_id, max_id) = l.id_bounds();
+                ManifestLayer {
+                    id: id.0,
+                    name: l.name.clone(),
+                    generation: l.generation,
+                    node_count: l.nodes.len() as u64,
+                    min_id,
+                    max_id,
+                    parents,
+                    children,
+                }
+            })
+            .collect();
+        let graph_index = |m: &rustc_hash::FxHashMap<u32, Vec<LayerId>>| {
+            m.iter()
+                .map(|(&term, ls)| {
+                    let mut v: Vec<u32> = ls.iter().map(|l| l.0).collect();
+                    v.sort_unstable();
+                    (self.strings.resolve(term).to_owned(), v)
+                })
+                .collect()
+        };
+        Manifest {
+            version: FORMAT_VERSION,
+            generation,
+            layers,
+            label_layers: graph_index(&self.label_layers),
+            key_layers: graph_index(&self.key_layers),
+        }
+    }
+
+    /// Archives the whole graph: the manifest and every layer segment.
+    pub fn to_segments(&self) -> (SegmentBytes, Vec<SegmentBytes>) {
+        let manifest = archive(&self.manifest(self.structure_generation));
+        let layers = self
+            .layers
+            .keys()
+            .map(|&l| archive(&self.layer_segment(l)))
+            .collect();
+        (manifest, layers)
+    }
+}
+
+/// A writer that only counts bytes: the first pass of archiving into a buffer of exact
+/// size (a loaned shared-memory sample), so the archive is written once, in place.
+#[derive(Default)]
+struct ByteCounter {
+    pos: usize,
+}
+
+impl rkyv::ser::Positional for ByteCounter {
+    fn pos(&self) -> usize {
+        self.pos
+    }
+}
+
+impl<E> rkyv::ser::Writer<E> for ByteCounter {
+    fn write(&mut self, bytes: &[u8]) -> Result<(), E> {
+        self.pos += bytes.len();
+        Ok(())
+    }
+}
+
+type Serializer<'a, W> =
+    rkyv::api::high::HighSerializer<W, rkyv::ser::allocator::ArenaHandle<'a>, rkyv::rancor::Error>;
+
+fn archived_len_of<T>(value: &T) -> usize
+where
+    T: for<'a> Serialize<Serializer<'a, ByteCounter>>,
+{
+    rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(value, ByteCounter::default())
+        .expect("counting bytes cannot fail")
+        .pos
+}
+
+fn archive_into_slice<T>(value: &T, out: &mut [u8]) -> Result<usize, SnapshotError>
+where
+    T: for<'a, 'b> Serialize<Serializer<'a, rkyv::ser::writer::Buffer<'b>>>,
+{
+    use rkyv::ser::Positional;
+    let len = out.len();
+    let written = rkyv::api::high::to_bytes_in::<_, rkyv::rancor::Error>(
+        value,
+        rkyv::ser::writer::Buffer::from(out),
+    )
+    .map_err(|e| SnapshotError::Layout {
+        what: "archive".into(),
+        reason: format!("{len}-byte buffer: {e}"),
+    })?
+    .pos();
+    Ok(written)
+}
+
+macro_rules! in_place_archiving {
+    ($t:ty) => {
+        impl $t {
+            /// Exact size of this value's archive, for loaning a buffer of that size.
+            pub fn archived_len(&self) -> usize {
+                archived_len_of(self)
+            }
+
+            /// Archives straight into `out` (which must be 16-byte aligned and at least
+            /// [`Self::archived_len`] bytes) and returns the bytes written.
+            ///
+            /// # Errors
+            /// [`SnapshotError::Layout`] when `out` is too small.
+            pub fn archive_into(&self, out: &mut [u8]) -> Result<usize, SnapshotError> {
+                archive_into_slice(self, out)
+            }
+        }
+    };
+}
+
+in_place_archiving!(LayerSegment);
+in_place_archiving!(Manifest);
+
+impl SceneGraph {
+    /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of
+    /// `segment` (the layer's columns) whose items are rows.
+    pub(crate) fn archived_layer_index(
+        &self,
+        layer: LayerId,
+        segment: &LayerSegment,
+    ) -> Option<KdTree> {
+        self.indexes.layers.get(&layer)?;
+        let mut entries = Vec::with_capacity(segment.points.len());
+        for (row, w) in segment.point_offsets.windows(2).enumerate() {
+            entries.extend(
+                segment.points[w[0] as usize..w[1] as usize]
+                    .iter()
+                    .map(|p| (row as u32, *p)),
+            );
+        }
+        Some(build_tree(&entries))
+    }
+
+    /// The node indexes rooted in `layer` for a snapshot, ascending by root: items are
+    /// positions in each index's sorted id table.
+    pub(crate) fn archived_node_indexes(&self, layer: LayerId) -> Vec<NodeIndexSegment> {
+        let mut roots: Vec<NodeId> = self
+            .indexes
+            .nodes
+            .keys()
+            .copied()
+            .filter(|r| self.nodes[r].layer == layer)
+            .collect();
+        roots.sort_unstable();
+        roots
+            .into_iter()
+            .map(|root| self.archived_node_index(root))
+            .collect()
+    }
+
+    /// The node index rooted at `root` for a snapshot (`root` must have one): items are
+    /// positions in its sorted id table.
+    pub(crate) fn archived_node_index(&self, root: NodeId) -> NodeIndexSegment {
+        let mut members = self.indexed_members(root);
+        members.sort_unstable_by_key(|m| m.0);
+        let mut entries = Vec::new();
+        for (i, (_, points)) in members.iter().enumerate() {
+            entries.extend(points.iter().map(|p| (i as u32, *p)));
+        }
+        NodeIndexSegment {
+            root: root.0,
+            ids: members.iter().map(|m| m.0.0).collect(),
+            tree: build_tree(&entries),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::snapshot::validate_layer;
+
+    #[test]
+    fn archiving_in_place_gives_the_same_bytes_as_archiving_to_a_vector() {
+        let mut g = SceneGraph::new();
+        let l = g.add_layer("objects").unwrap();
+        for i in 0..50 {
+            g.add_node(NodeId(i), l).unwrap();
+            g.set_geometry(NodeId(i), vec![[i as f32, 1.0, 2.0]])
+                .unwrap();
+            g.add_label(NodeId(i), if i % 2 == 0 { "even" } else { "odd" })
+                .unwrap();
+        }
+        let seg = g.layer_segment(l);
+        let expected = archive(&seg);
+        let len = seg.archived_len();
+        assert_eq!(len, expected.len());
+        let mut out = SegmentBytes::with_capacity(len);
+        out.resize(len, 0);
+        assert_eq!(seg.archive_into(&mut out).unwrap(), len);
+        assert_eq!(out.as_slice(), expected.as_slice());
+        validate_layer(&out, "in place").unwrap();
+        let mut short = SegmentBytes::with_capacity(len);
+        short.resize(len - 1, 0);
+        assert!(seg.archive_into(&mut short).is_err());
+    }
+}

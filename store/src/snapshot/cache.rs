@@ -1,0 +1,460 @@
+//! [`SegmentCache`]: incremental layer segments and manifests for a publishing writer.
+//!
+//! The cache keeps the columns it last built for each layer; every mutation records
+//! what it changed in the layer's change journal (`crate::change`). When the journal
+//! starts at the generation of the cached segment and the rows kept their places since
+//! — nodes removed only from the end (the largest ids), new nodes only with ids above
+//! every remaining one, no index enabled or disabled — the next build looks up only the
+//! changed nodes: when each changed row keeps the length of every column (a node moved,
+//! a value changed) it is overwritten in place and new rows are appended; otherwise
+//! fresh columns are built, copying each run of unchanged rows from the previous ones in
+//! one go. Label and key postings are rebuilt only when labels or keys changed or rows
+//! were added. The layer index is rebuilt only when points changed, a node index only
+//! when its sub-tree did. Otherwise (the journal overflowed, or starts elsewhere: another
+//! consumer took it) it builds from scratch like [`SceneGraph::layer_segment`].
+//!
+//! Either way the segment holds the same rows as a fresh one; only the order of its
+//! string table may differ, and strings no longer used stay until the next full build
+//! (one is forced once the table doubled). `store/tests/graph_props.rs` and
+//! `dsg/tests/segment_cache_office.rs` check this against fresh builds under random
+//! mutations.
+
+use super::archive::StringTable;
+use super::schema::{LayerSegment, Manifest};
+use crate::change::LayerChanges;
+use crate::{LayerId, NodeId, SceneGraph};
+use rustc_hash::FxHashMap;
+use std::ops::Range;
+
+/// Incremental segments and manifest of one live graph, owned by whoever publishes it:
+/// after a small change to a large layer only the changed rows are rebuilt.
+///
+/// Use one cache per graph: it follows the graph through the graph's change journals,
+/// which it consumes.
+///
+/// # Examples
+/// ```
+/// # use ygg_store::{SceneGraph, NodeId, snapshot::SegmentCache};
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let mut g = SceneGraph::new();
+/// let poses = g.add_layer("poses")?;
+/// g.add_node(NodeId(1), poses)?;
+/// let mut cache = SegmentCache::new();
+/// assert_eq!(cache.layer_segment(&mut g, poses).ids, [1]);
+/// g.add_node(NodeId(2), poses)?; // appended: only the new row is built
+/// assert_eq!(cache.layer_segment(&mut g, poses).ids, [1, 2]);
+/// assert_eq!(cache.manifest(&g, 2).layers[0].node_count, 2);
+/// # Ok(()) }
+/// ```
+#[derive(Default)]
+pub struct SegmentCache {
+    layers: FxHashMap<LayerId, Box<Cached>>,
+    /// The last manifest and the graph's structure and terms generations it was built at.
+    manifest: Option<(u64, u64, Manifest)>,
+}
+
+impl std::fmt::Debug for SegmentCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SegmentCache")
+            .field("layers", &self.layers.len())
+            .field("manifest", &self.manifest.is_some())
+            .finish()
+    }
+}
+
+/// One layer's cached segment.
+struct Cached {
+    segment: LayerSegment,
+    strings: StringTable,
+    /// The layer's incarnation (a removed layer's id may come back).
+    incarnation: u64,
+    /// Length of the string table after the last full build.
+    strings_at_full_build: usize,
+}
+
+impl SegmentCache {
+    /// An empty cache.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The segment of `layer`, equal in content to [`SceneGraph::layer_segment`], built
+    /// incrementally from the one this cache built last time (see the module docs):
+    /// after a small change to a large layer only the changed rows are rebuilt. The
+    /// columns stay allocated: about the layer's archived size, per layer. Consumes the
+    /// layer's change journal.
+    ///
+    /// # Panics
+    /// If `layer` does not exist.
+    pub fn layer_segment(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &LayerSegment {
+        let l = &graph.layers[&layer];
+        let (generation, incarnation) = (l.generation, l.incarnation);
+        let cached = self
+            .layers
+            .remove(&layer)
+            .filter(|c| c.incarnation == incarnation);
+        let cached = match cached {
+            Some(c) if c.segment.generation == generation => c,
+            Some(c) => {
+                let changes = graph.take_layer_changes(layer);
+                patched(graph, layer, *c, changes).unwrap_or_else(|| full(graph, layer))
+            }
+            None => {
+                graph.take_layer_changes(layer);
+                full(graph, layer)
+            }
+        };
+        &self
+            .layers
+            .entry(layer)
+            .insert_entry(cached)
+            .into_mut()
+            .segment
+    }
+
+    /// The manifest [`SceneGraph::manifest`] builds, kept for next time: while no layer,
+    /// layer edge or graph-level label/key entry was added or removed, only the
+    /// per-layer generations, node counts and id bounds are brought up to date (the id
+    /// bounds from this cache's segments where they are current).
+    pub fn manifest(&mut self, graph: &SceneGraph, generation: u64) -> &Manifest {
+        let key = (graph.structure_generation, graph.terms_generation);
+        self.layers.retain(|id, _| graph.layers.contains_key(id));
+        let manifest = match self.manifest.take() {
+            Some((s, t, mut m)) if (s, t) == key => {
+                for (entry, (id, l)) in m.layers.iter_mut().zip(&graph.layers) {
+                    entry.generation = l.generation;
+                    entry.node_count = l.nodes.len() as u64;
+                    (entry.min_id, entry.max_id) = match self.layers.get(id) {
+                        Some(c)
+                            if c.segment.generation == l.generation
+                                && c.incarnation == l.incarnation =>
+                        {
+                            (
+                                c.segment.ids.first().copied().unwrap_or(u64::MAX),
+                                c.segment.ids.last().copied().unwrap_or(0),
+                            )
+                        }
+                        _ => l.id_bounds(),
+                    };
+                }
+                m.generation = generation;
+                m
+            }
+            _ => graph.manifest(generation),
+        };
+        &self.manifest.insert((key.0, key.1, manifest)).2
+    }
+}
+
+fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
+    let (segment, strings) = graph.build_layer_segment(layer);
+    Box::new(Cached {
+        incarnation: graph.layers[&layer].incarnation,
+        strings_at_full_build: segment.strings.len(),
+        segment,
+        strings,
+    })
+}
+
+/// The cached segment brought up to date row by row, or `None` when rows moved (a
+/// full build is needed).
+fn patched(
+    graph: &SceneGraph,
+    layer: LayerId,
+    cache: Cached,
+    changes: LayerChanges,
+) -> Option<Box<Cached>> {
+    let Cached {
+        segment: mut old,
+        strings: mut table,
+        strings_at_full_build,
+        incarnation,
+    } = cache;
+    if changes.everything
+        || changes.since != old.generation
+        || old.strings.len() > 2 * strings_at_full_build + 64
+    {
+        return None;
+    }
+    let l = &graph.layers[&layer];
+    let mut changed: Vec<NodeId> = changes.nodes;
+    changed.sort_unstable();
+    changed.dedup();
+    let mut removed = changes.removed;
+    removed.sort_unstable();
+    removed.dedup();
+    if !removed.is_empty() {
+        // Only the last rows, gone for good, keep the other rows in place.
+        let kept = old.ids.len().checked_sub(removed.len())?;
+        if !old.ids[kept..].iter().eq(removed.iter().map(|id| &id.0))
+            || removed.iter().any(|id| graph.nodes.contains_key(id))
+        {
+            return None;
+        }
+        old.truncate_rows(kept);
+        changed.retain(|id| removed.binary_search(id).is_err());
+    }
+    let old_rows = old.ids.len();
+    let mut dirty_rows = Vec::with_capacity(changed.len());
+    let mut appended = Vec::new();
+    for id in changed {
+        if graph.nodes.get(&id).is_none_or(|n| n.layer != layer) {
+            return None;
+        }
+        match old.ids.binary_search(&id.0) {
+            Ok(row) => dirty_rows.push(row),
+            Err(at) if at == old_rows => appended.push(id.0),
+            Err(_) => return None,
+        }
+    }
+    if old_rows + appended.len() != l.nodes.len() {
+        return None;
+    }
+    let mut ids = Vec::with_capacity(l.nodes.len());
+    ids.extend_from_slice(&old.ids);
+    ids.extend_from_slice(&appended);
+
+    let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &ids) {
+        Some(terms_changed) => {
+            for (row, &id) in ids.iter().enumerate().skip(old_rows) {
+                graph.push_row(
+                    &mut old,
+                    &mut table,
+                    &graph.nodes[&NodeId(id)],
+                    row as u32,
+                    &ids,
+                );
+            }
+            old.ids = ids;
+            old.generation = l.generation;
+            if terms_changed || old_rows < old.ids.len() || !removed.is_empty() {
+                old.rebuild_postings();
+            }
+            old
+        }
+        None => {
+            let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
+            s.strings = std::mem::take(&mut old.strings);
+            let mut aabb_cursor = 0;
+            let mut clean_from = 0;
+            for row in dirty_rows.into_iter().chain(old_rows..ids.len()) {
+                copy_rows(
+                    &old,
+                    &mut s,
+                    clean_from..row.min(old_rows),
+                    &mut aabb_cursor,
+                );
+                let node = &graph.nodes[&NodeId(ids[row])];
+                graph.push_row(&mut s, &mut table, node, row as u32, &ids);
+                clean_from = row + 1;
+            }
+            copy_rows(&old, &mut s, clean_from..old_rows, &mut aabb_cursor);
+            s.ids = ids;
+            s.rebuild_postings();
+            s.layer_index = old.layer_index.take();
+            s.node_indexes = std::mem::take(&mut old.node_indexes);
+            s
+        }
+    };
+
+    if changes.geometry {
+        s.layer_index = graph.archived_layer_index(layer, &s);
+    }
+    let mut roots = changes.index_roots;
+    roots.sort_unstable();
+    roots.dedup();
+    s.node_indexes
+        .retain(|index| removed.binary_search(&NodeId(index.root)).is_err());
+    for index in &mut s.node_indexes {
+        if roots.binary_search(&NodeId(index.root)).is_ok() {
+            *index = graph.archived_node_index(NodeId(index.root));
+        }
+    }
+    Some(Box::new(Cached {
+        segment: s,
+        strings: table,
+        incarnation,
+        strings_at_full_build,
+    }))
+}
+
+/// Rewrites the changed rows `dirty_rows` of `seg` in place: those that keep the
+/// length of every column (a node moved, a value changed) are overwritten; from the
+/// first one that does not (an edge or child added), the rows are cut and pushed
+/// again — if that tail is short (appending nodes changes the last rows: an odometry
+/// edge to the previous pose). Returns whether the postings must be rebuilt, or
+/// `None`, changing nothing, when the tail would be long. `ids` are the new sorted
+/// ids.
+fn rows_in_place(
+    graph: &SceneGraph,
+    seg: &mut LayerSegment,
+    table: &mut StringTable,
+    dirty_rows: &[usize],
+    ids: &[u64],
+) -> Option<bool> {
+    let mut fresh = Vec::with_capacity(dirty_rows.len());
+    let mut cut_at = None;
+    for &row in dirty_rows {
+        let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
+        // New strings go to the segment's own table.
+        one.strings = std::mem::take(&mut seg.strings);
+        graph.push_row(
+            &mut one,
+            table,
+            &graph.nodes[&NodeId(ids[row])],
+            row as u32,
+            ids,
+        );
+        seg.strings = std::mem::take(&mut one.strings);
+        let same_shape = [
+            (&seg.point_offsets, &one.point_offsets),
+            (&seg.child_offsets, &one.child_offsets),
+            (&seg.out_offsets, &one.out_offsets),
+            (&seg.in_offsets, &one.in_offsets),
+            (&seg.label_offsets, &one.label_offsets),
+            (&seg.feature_offsets, &one.feature_offsets),
+        ]
+        .iter()
+        .all(|(old, new)| old[row + 1] - old[row] == new[1]);
+        if !same_shape {
+            // Dirty rows are ascending: this one and all after it are pushed again.
+            let rows = seg.ids.len();
+            if rows - row > rows / 8 {
+                return None;
+            }
+            cut_at = Some(row);
+            break;
+        }
+        fresh.push(one);
+    }
+    let mut terms_changed = cut_at.is_some();
+    for (&row, one) in dirty_rows.iter().zip(&fresh) {
+        let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
+        let r = at(&seg.label_offsets);
+        terms_changed |= seg.labels[r.clone()] != one.labels[..];
+        seg.labels[r].copy_from_slice(&one.labels);
+        let r = at(&seg.feature_offsets);
+        terms_changed |= seg.feature_keys[r.clone()] != one.feature_keys[..];
+        seg.feature_keys[r.clone()].copy_from_slice(&one.feature_keys);
+        seg.feature_kinds[r.clone()].copy_from_slice(&one.feature_kinds);
+        seg.feature_bits[r].copy_from_slice(&one.feature_bits);
+        let r = at(&seg.point_offsets);
+        seg.points[r].copy_from_slice(&one.points);
+        let r = at(&seg.child_offsets);
+        seg.children[r].copy_from_slice(&one.children);
+        let r = at(&seg.out_offsets);
+        seg.out_targets[r.clone()].copy_from_slice(&one.out_targets);
+        seg.out_descriptions[r].copy_from_slice(&one.out_descriptions);
+        let r = at(&seg.in_offsets);
+        seg.in_sources[r.clone()].copy_from_slice(&one.in_sources);
+        seg.in_descriptions[r].copy_from_slice(&one.in_descriptions);
+        seg.parents[row] = one.parents[0];
+        match (
+            seg.aabb_rows.binary_search(&(row as u32)),
+            one.aabbs.first(),
+        ) {
+            (Ok(i), Some(b)) => seg.aabbs[i] = *b,
+            (Ok(i), None) => {
+                seg.aabb_rows.remove(i);
+                seg.aabbs.remove(i);
+            }
+            (Err(i), Some(b)) => {
+                seg.aabb_rows.insert(i, row as u32);
+                seg.aabbs.insert(i, *b);
+            }
+            (Err(_), None) => {}
+        }
+    }
+    if let Some(cut) = cut_at {
+        let rows = seg.ids.len();
+        seg.truncate_rows(cut);
+        for (row, &id) in ids.iter().enumerate().take(rows).skip(cut) {
+            graph.push_row(seg, table, &graph.nodes[&NodeId(id)], row as u32, ids);
+        }
+        seg.ids.extend_from_slice(&ids[cut..rows]);
+    }
+    Some(terms_changed)
+}
+
+impl LayerSegment {
+    /// Drops every row from `rows` on (not the postings or the spatial indexes).
+    fn truncate_rows(&mut self, rows: usize) {
+        fn cut<T>(offsets: &mut Vec<u32>, rows: usize, values: &mut Vec<T>) -> usize {
+            let end = offsets[rows] as usize;
+            offsets.truncate(rows + 1);
+            values.truncate(end);
+            end
+        }
+        cut(&mut self.point_offsets, rows, &mut self.points);
+        cut(&mut self.child_offsets, rows, &mut self.children);
+        let end = cut(&mut self.out_offsets, rows, &mut self.out_targets);
+        self.out_descriptions.truncate(end);
+        let end = cut(&mut self.in_offsets, rows, &mut self.in_sources);
+        self.in_descriptions.truncate(end);
+        cut(&mut self.label_offsets, rows, &mut self.labels);
+        let end = cut(&mut self.feature_offsets, rows, &mut self.feature_keys);
+        self.feature_kinds.truncate(end);
+        self.feature_bits.truncate(end);
+        self.parents.truncate(rows);
+        self.ids.truncate(rows);
+        let boxes = self.aabb_rows.partition_point(|&r| (r as usize) < rows);
+        self.aabb_rows.truncate(boxes);
+        self.aabbs.truncate(boxes);
+    }
+}
+
+/// Appends rows `rows` of `old` to `new` unchanged (they keep their row numbers, so
+/// edge rows stay valid), advancing `aabb_cursor` through `old`'s sparse boxes.
+fn copy_rows(
+    old: &LayerSegment,
+    new: &mut LayerSegment,
+    rows: Range<usize>,
+    aabb_cursor: &mut usize,
+) {
+    let (a, b) = (rows.start, rows.end);
+    if a < b {
+        let r = copy_offsets(&mut new.point_offsets, &old.point_offsets, a, b);
+        new.points.extend_from_slice(&old.points[r]);
+        let r = copy_offsets(&mut new.child_offsets, &old.child_offsets, a, b);
+        new.children.extend_from_slice(&old.children[r]);
+        let r = copy_offsets(&mut new.out_offsets, &old.out_offsets, a, b);
+        new.out_targets
+            .extend_from_slice(&old.out_targets[r.clone()]);
+        new.out_descriptions
+            .extend_from_slice(&old.out_descriptions[r]);
+        let r = copy_offsets(&mut new.in_offsets, &old.in_offsets, a, b);
+        new.in_sources.extend_from_slice(&old.in_sources[r.clone()]);
+        new.in_descriptions
+            .extend_from_slice(&old.in_descriptions[r]);
+        let r = copy_offsets(&mut new.label_offsets, &old.label_offsets, a, b);
+        new.labels.extend_from_slice(&old.labels[r]);
+        let r = copy_offsets(&mut new.feature_offsets, &old.feature_offsets, a, b);
+        new.feature_keys
+            .extend_from_slice(&old.feature_keys[r.clone()]);
+        new.feature_kinds
+            .extend_from_slice(&old.feature_kinds[r.clone()]);
+        new.feature_bits.extend_from_slice(&old.feature_bits[r]);
+        new.parents.extend_from_slice(&old.parents[a..b]);
+    }
+    // Boxes of rows before `b`: those in `a..b` are copied, the rest (rebuilt rows) are
+    // skipped.
+    while let Some(&row) = old.aabb_rows.get(*aabb_cursor) {
+        if row as usize >= b {
+            break;
+        }
+        if row as usize >= a {
+            new.aabb_rows.push(row);
+            new.aabbs.push(old.aabbs[*aabb_cursor]);
+        }
+        *aabb_cursor += 1;
+    }
+}
+
+/// Appends `old`'s offsets of rows `a..b`, shifted to continue `new`; returns the range
+/// of those rows' entries in `old`'s value columns.
+fn copy_offsets(new: &mut Vec<u32>, old: &[u32], a: usize, b: usize) -> Range<usize> {
+    let base = *new.last().expect("offset columns start with 0");
+    let start = old[a];
+    new.extend(old[a + 1..=b].iter().map(|&o| o - start + base));
+    start as usize..old[b] as usize
+}

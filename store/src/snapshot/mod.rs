@@ -1,0 +1,47 @@
+//! Archived snapshots: the packed, column-oriented rkyv layout, `.ygg` files, and
+//! [`ArchivedScene`], the [`crate::SceneView`] over validated archived bytes.
+//!
+//! A snapshot is one **manifest** segment plus one **layer** segment per layer. A layer
+//! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids,
+//! children in CSR form, out- and in-edges in CSR form (rows within the layer), labels,
+//! features, sparse bounding boxes and the inverted label/key indexes, plus the layer's
+//! spatial indexes: its layer index and the node indexes rooted at its nodes, as kiddo's
+//! archived kd-trees (queried in place; their leaves are 128-byte aligned inside the
+//! 128-byte aligned segment). The same segments travel through shared memory; a `.ygg`
+//! file stores them back to back.
+//!
+//! # Validation
+//! Bytes are untrusted. [`validate_layer`] and [`validate_manifest`] run rkyv's
+//! bytecheck and then [`check_layer`]'s consistency pass (offsets monotonic and in
+//! range, rows in range, ids sorted, string indexes in range, kd-tree shapes, extents and
+//! items in range), so that every accessor of [`ArchivedScene`] is total: no index it
+//! computes can be out of bounds. Only after that do we re-derive references with
+//! `access_unchecked`.
+//!
+//! # Row indexes
+//! Inside a layer segment nodes are addressed by a dense `u32` row (their rank by id).
+//! A row is valid only within that layer generation.
+//!
+//! # Modules
+//! `schema` (the archived types), `archive` (archiving the live graph), `cache`
+//! (incremental segments for a publishing writer), `file` (`.ygg` files), `validate`
+//! (checking untrusted bytes), `view` ([`ArchivedScene`]).
+
+mod archive;
+mod cache;
+mod file;
+mod schema;
+mod validate;
+mod view;
+
+pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
+pub use cache::SegmentCache;
+pub use file::{FILE_MAGIC, SnapshotFile};
+pub use schema::{
+    ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer, ArchivedNodeIndexSegment,
+    FORMAT_VERSION, LayerSegment, Manifest, ManifestLayer, NodeIndexSegment,
+};
+pub use validate::{
+    check_layer, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,
+};
+pub use view::{ArchivedNodeRef, ArchivedScene};

@@ -1,0 +1,140 @@
+//! The archived types: one [`LayerSegment`] per layer and a [`Manifest`] per cut, as
+//! rkyv archives them.
+
+use crate::index::KdTree;
+use rkyv::vec::ArchivedVec;
+use rkyv::{Archive, Serialize};
+use std::collections::HashMap;
+
+/// Version of the archived layout; bumped on every incompatible change.
+pub const FORMAT_VERSION: u32 = 3;
+
+/// Marks "no parent" in the parent column.
+pub(crate) const NO_PARENT: u64 = u64::MAX;
+
+/// One layer, as archived: columns indexed by row (rank of the node id in the layer).
+#[derive(Archive, Serialize, Debug, Default)]
+pub struct LayerSegment {
+    /// [`FORMAT_VERSION`] of the writer.
+    pub version: u32,
+    /// The layer's id.
+    pub layer: u32,
+    /// The layer's generation.
+    pub generation: u64,
+    /// The layer's name.
+    pub name: String,
+    /// Strings used by this layer (labels, keys, string values, edge descriptions).
+    pub strings: Vec<String>,
+    /// Node ids, strictly ascending.
+    pub ids: Vec<u64>,
+    /// CSR offsets into `points` (rows + 1 entries).
+    pub point_offsets: Vec<u32>,
+    /// Every point of every node of the layer.
+    pub points: Vec<[f32; 3]>,
+    /// Parent id of each row (`u64::MAX` for none).
+    pub parents: Vec<u64>,
+    /// CSR offsets into `children`.
+    pub child_offsets: Vec<u32>,
+    /// Children ids (in other layers), ascending per row.
+    pub children: Vec<u64>,
+    /// CSR offsets into `out_targets` / `out_descriptions`.
+    pub out_offsets: Vec<u32>,
+    /// Target rows of out-edges, ascending by target id per row.
+    pub out_targets: Vec<u32>,
+    /// Description (string index) of each out-edge.
+    pub out_descriptions: Vec<u32>,
+    /// CSR offsets into `in_sources` / `in_descriptions`.
+    pub in_offsets: Vec<u32>,
+    /// Source rows of in-edges, ascending by source id per row.
+    pub in_sources: Vec<u32>,
+    /// Description (string index) of each in-edge.
+    pub in_descriptions: Vec<u32>,
+    /// CSR offsets into `labels`.
+    pub label_offsets: Vec<u32>,
+    /// Labels (string indexes).
+    pub labels: Vec<u32>,
+    /// CSR offsets into the feature columns.
+    pub feature_offsets: Vec<u32>,
+    /// Feature keys (string indexes).
+    pub feature_keys: Vec<u32>,
+    /// Feature kinds (string, int, float, bool).
+    pub feature_kinds: Vec<u8>,
+    /// Feature values: string index, i64 bits, f64 bits or 0/1.
+    pub feature_bits: Vec<u64>,
+    /// Rows whose bounding box is enabled and non-empty, ascending.
+    pub aabb_rows: Vec<u32>,
+    /// Their boxes, `[min, max]` flattened.
+    pub aabbs: Vec<[f32; 6]>,
+    /// Label -> `[start, end)` range of `label_postings`.
+    pub label_index: HashMap<String, [u32; 2]>,
+    /// Rows per label, ascending.
+    pub label_postings: Vec<u32>,
+    /// Feature key -> `[start, end)` range of `key_postings`.
+    pub key_index: HashMap<String, [u32; 2]>,
+    /// Rows per feature key, ascending.
+    pub key_postings: Vec<u32>,
+    /// The layer index, if enabled: a kd-tree over every point of the layer whose items
+    /// are rows.
+    pub layer_index: Option<KdTree>,
+    /// The node indexes rooted at nodes of this layer, ascending by root.
+    pub node_indexes: Vec<NodeIndexSegment>,
+}
+
+/// A node index as archived in its root's layer segment.
+#[derive(Archive, Serialize, Debug)]
+pub struct NodeIndexSegment {
+    /// The root node.
+    pub root: u64,
+    /// Ids of the nodes with points in the root's sub-tree, ascending; an item is a
+    /// position in this table.
+    pub ids: Vec<u64>,
+    /// A kd-tree over every point in the sub-tree.
+    pub tree: KdTree,
+}
+
+/// A layer's entry in the manifest.
+#[derive(Archive, Serialize, Debug, Default, Clone)]
+pub struct ManifestLayer {
+    /// The layer's id.
+    pub id: u32,
+    /// The layer's name.
+    pub name: String,
+    /// The generation of the layer segment that belongs to this cut.
+    pub generation: u64,
+    /// Number of nodes.
+    pub node_count: u64,
+    /// Smallest node id (`u64::MAX` when empty).
+    pub min_id: u64,
+    /// Largest node id (0 when empty).
+    pub max_id: u64,
+    /// DAG parents, ascending.
+    pub parents: Vec<u32>,
+    /// DAG children, ascending.
+    pub children: Vec<u32>,
+}
+
+/// The manifest: which layers at which generations form one consistent cut, the layer
+/// DAG, and the graph-level inverted indexes.
+#[derive(Archive, Serialize, Debug, Default)]
+pub struct Manifest {
+    /// [`FORMAT_VERSION`] of the writer.
+    pub version: u32,
+    /// Generation of the whole cut (increases with every publish).
+    pub generation: u64,
+    /// Layers, ascending by id.
+    pub layers: Vec<ManifestLayer>,
+    /// Label -> layers holding it, ascending.
+    pub label_layers: HashMap<String, Vec<u32>>,
+    /// Feature key -> layers holding it, ascending.
+    pub key_layers: HashMap<String, Vec<u32>>,
+}
+
+/// An archived `u32` column as native values.
+pub(crate) fn u32s(v: &ArchivedVec<rkyv::rend::u32_le>) -> &[u32] {
+    bytemuck::cast_slice(v.as_slice())
+}
+
+/// An archived `u64` column as native values.
+pub(crate) fn u64s(v: &ArchivedVec<rkyv::rend::u64_le>) -> &[u64] {
+    bytemuck::cast_slice(v.as_slice())
+}

@@ -1,0 +1,289 @@
+//! Validating untrusted segment bytes: rkyv's bytecheck, then [`check_layer`]'s
+//! consistency pass, so that every accessor of [`super::ArchivedScene`] is total; and
+//! re-deriving references to bytes validated before.
+
+#![allow(
+    unsafe_code,
+    reason = "re-deriving references to bytes validated before"
+)]
+
+use super::schema::{ArchivedLayerSegment, ArchivedManifest, FORMAT_VERSION, u32s, u64s};
+use crate::SnapshotError;
+use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
+use crate::index::check_tree;
+
+fn validation(what: &str, e: impl std::fmt::Display) -> SnapshotError {
+    SnapshotError::Validation {
+        what: what.to_owned(),
+        reason: e.to_string(),
+    }
+}
+
+/// Validates manifest bytes (bytecheck, version) and returns the archived manifest.
+///
+/// # Errors
+/// Misaligned bytes, bytecheck failure, or a foreign version.
+pub fn validate_manifest<'a>(
+    bytes: &'a [u8],
+    what: &str,
+) -> Result<&'a ArchivedManifest, SnapshotError> {
+    check_alignment(bytes, what)?;
+    let m = rkyv::access::<ArchivedManifest, rkyv::rancor::Error>(bytes)
+        .map_err(|e| validation(what, e))?;
+    if m.version.to_native() != FORMAT_VERSION {
+        return Err(SnapshotError::SchemaVersion {
+            what: what.to_owned(),
+            found: m.version.to_native(),
+            expected: FORMAT_VERSION,
+        });
+    }
+    Ok(m)
+}
+
+/// Validates layer-segment bytes (bytecheck, version, [`check_layer`]).
+///
+/// # Errors
+/// Misaligned bytes, bytecheck failure, a foreign version, or inconsistent columns.
+pub fn validate_layer<'a>(
+    bytes: &'a [u8],
+    what: &str,
+) -> Result<&'a ArchivedLayerSegment, SnapshotError> {
+    check_alignment(bytes, what)?;
+    let l = rkyv::access::<ArchivedLayerSegment, rkyv::rancor::Error>(bytes)
+        .map_err(|e| validation(what, e))?;
+    if l.version.to_native() != FORMAT_VERSION {
+        return Err(SnapshotError::SchemaVersion {
+            what: what.to_owned(),
+            found: l.version.to_native(),
+            expected: FORMAT_VERSION,
+        });
+    }
+    check_layer(l).map_err(|reason| SnapshotError::Inconsistent {
+        what: what.to_owned(),
+        reason,
+    })?;
+    Ok(l)
+}
+
+fn check_alignment(bytes: &[u8], what: &str) -> Result<(), SnapshotError> {
+    if !(bytes.as_ptr() as usize).is_multiple_of(16) {
+        return Err(SnapshotError::Layout {
+            what: what.to_owned(),
+            reason: "bytes are not 16-byte aligned".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Checks a CSR offsets column: `rows + 1` entries, starting at 0, non-decreasing,
+/// ending at `len`.
+fn check_offsets(name: &str, offsets: &[u32], rows: usize, len: usize) -> Result<(), String> {
+    if offsets.len() != rows + 1 || offsets[0] != 0 || offsets[rows] as usize != len {
+        return Err(format!(
+            "{name}: {} offsets for {rows} rows and {len} entries",
+            offsets.len()
+        ));
+    }
+    if !offsets.is_sorted() {
+        return Err(format!("{name}: offsets decrease"));
+    }
+    Ok(())
+}
+
+fn check_below(name: &str, values: &[u32], bound: usize) -> Result<(), String> {
+    match values.iter().position(|&v| v as usize >= bound) {
+        Some(i) => Err(format!(
+            "{name}[{i}] = {} is out of range (< {bound})",
+            values[i]
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The consistency pass run once per validated layer segment: everything an accessor
+/// indexes is in range. Linear in the number of rows, edges, labels and features; the
+/// point column itself is not scanned.
+pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
+    let ids = u64s(&l.ids);
+    let rows = ids.len();
+    if rows > u32::MAX as usize {
+        return Err("too many rows".into());
+    }
+    if !ids.windows(2).all(|w| w[0] < w[1]) {
+        return Err("node ids are not strictly ascending".into());
+    }
+    if ids.last() == Some(&u64::MAX) {
+        return Err("reserved node id u64::MAX".into());
+    }
+    let nstr = l.strings.len();
+    check_offsets(
+        "point_offsets",
+        u32s(&l.point_offsets),
+        rows,
+        l.points.len(),
+    )?;
+    if l.parents.len() != rows {
+        return Err("parents column length differs from ids".into());
+    }
+    check_offsets(
+        "child_offsets",
+        u32s(&l.child_offsets),
+        rows,
+        l.children.len(),
+    )?;
+    check_offsets(
+        "out_offsets",
+        u32s(&l.out_offsets),
+        rows,
+        l.out_targets.len(),
+    )?;
+    check_offsets("in_offsets", u32s(&l.in_offsets), rows, l.in_sources.len())?;
+    if l.out_descriptions.len() != l.out_targets.len()
+        || l.in_descriptions.len() != l.in_sources.len()
+    {
+        return Err("edge description columns differ in length from edge columns".into());
+    }
+    check_below("out_targets", u32s(&l.out_targets), rows)?;
+    check_below("in_sources", u32s(&l.in_sources), rows)?;
+    check_below("out_descriptions", u32s(&l.out_descriptions), nstr)?;
+    check_below("in_descriptions", u32s(&l.in_descriptions), nstr)?;
+    check_offsets(
+        "label_offsets",
+        u32s(&l.label_offsets),
+        rows,
+        l.labels.len(),
+    )?;
+    check_below("labels", u32s(&l.labels), nstr)?;
+    check_offsets(
+        "feature_offsets",
+        u32s(&l.feature_offsets),
+        rows,
+        l.feature_keys.len(),
+    )?;
+    let nfeat = l.feature_keys.len();
+    if l.feature_kinds.len() != nfeat || l.feature_bits.len() != nfeat {
+        return Err("feature columns differ in length".into());
+    }
+    check_below("feature_keys", u32s(&l.feature_keys), nstr)?;
+    for (i, (&kind, bits)) in l
+        .feature_kinds
+        .iter()
+        .zip(u64s(&l.feature_bits))
+        .enumerate()
+    {
+        match kind {
+            FEATURE_STR if *bits as usize >= nstr => {
+                return Err(format!("feature {i}: string index {bits} out of range"));
+            }
+            FEATURE_STR | FEATURE_INT | FEATURE_FLOAT | FEATURE_BOOL => {}
+            k => return Err(format!("feature {i}: unknown kind {k}")),
+        }
+    }
+    let aabb_rows = u32s(&l.aabb_rows);
+    if aabb_rows.len() != l.aabbs.len() || !aabb_rows.windows(2).all(|w| w[0] < w[1]) {
+        return Err("aabb rows not strictly ascending or differ in length from boxes".into());
+    }
+    check_below("aabb_rows", aabb_rows, rows)?;
+    for (name, index, postings) in [
+        ("label", &l.label_index, &l.label_postings),
+        ("key", &l.key_index, &l.key_postings),
+    ] {
+        let postings = u32s(postings);
+        check_below(&format!("{name}_postings"), postings, rows)?;
+        for (term, range) in index.iter() {
+            let [s, e] = [range[0].to_native() as usize, range[1].to_native() as usize];
+            if s > e || e > postings.len() {
+                return Err(format!(
+                    "{name} index entry {:?} has range {s}..{e} out of bounds",
+                    term.as_str()
+                ));
+            }
+        }
+    }
+    check_spatial_indexes(l, ids)
+}
+
+/// The spatial part of [`check_layer`]: every kd-tree passes [`check_tree`] with items
+/// bounded by its id table, and node indexes are rooted at this layer's nodes.
+fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), String> {
+    if let Some(tree) = l.layer_index.as_ref() {
+        check_tree(tree, ids.len()).map_err(|e| format!("layer index: {e}"))?;
+    }
+    let mut previous = None;
+    for ni in l.node_indexes.iter() {
+        let root = ni.root.to_native();
+        if previous.is_some_and(|p| p >= root) || ids.binary_search(&root).is_err() {
+            return Err(format!(
+                "node index root {root} unsorted or not in this layer"
+            ));
+        }
+        previous = Some(root);
+        check_tree(&ni.tree, ni.ids.len()).map_err(|e| format!("node index {root}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Checks the manifest's layer DAG: unique names, mirrored edges, no cycle. Edges are
+/// known to name listed layers.
+pub(super) fn check_dag(manifest: &ArchivedManifest) -> Result<(), String> {
+    let mut names: Vec<&str> = manifest.layers.iter().map(|m| m.name.as_str()).collect();
+    names.sort_unstable();
+    if names.windows(2).any(|w| w[0] == w[1]) {
+        return Err("two layers share a name".into());
+    }
+    let position = |id: u32| manifest.layers.iter().position(|m| m.id == id);
+    for m in manifest.layers.iter() {
+        for &c in u32s(&m.children) {
+            let child = &manifest.layers[position(c).ok_or("unknown DAG child")?];
+            if !u32s(&child.parents).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {} -> {c} is not mirrored", m.id));
+            }
+        }
+        for &p in u32s(&m.parents) {
+            let parent = &manifest.layers[position(p).ok_or("unknown DAG parent")?];
+            if !u32s(&parent.children).contains(&m.id.to_native()) {
+                return Err(format!("DAG edge {p} -> {} is not mirrored", m.id));
+            }
+        }
+    }
+    // Kahn's algorithm: every layer must be removable, or the DAG has a cycle.
+    let mut indegree: Vec<usize> = manifest.layers.iter().map(|m| m.parents.len()).collect();
+    let mut ready: Vec<usize> = (0..indegree.len()).filter(|&i| indegree[i] == 0).collect();
+    let mut removed = 0;
+    while let Some(i) = ready.pop() {
+        removed += 1;
+        for &c in u32s(&manifest.layers[i].children) {
+            let ci = position(c).ok_or("unknown DAG child")?;
+            indegree[ci] = indegree[ci].saturating_sub(1);
+            if indegree[ci] == 0 {
+                ready.push(ci);
+            }
+        }
+    }
+    if removed != manifest.layers.len() {
+        return Err("the layer DAG has a cycle".into());
+    }
+    Ok(())
+}
+
+/// Re-derives a layer segment from bytes that [`validate_layer`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_layer`] accepted.
+pub unsafe fn layer_unchecked(bytes: &[u8]) -> &ArchivedLayerSegment {
+    // SAFETY: the caller guarantees that `validate_layer` (bytecheck + `check_layer`)
+    // accepted these very bytes and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(bytes) }
+}
+
+/// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_manifest`] accepted.
+pub unsafe fn manifest_unchecked(bytes: &[u8]) -> &ArchivedManifest {
+    // SAFETY: the caller guarantees that `validate_manifest` accepted these very bytes
+    // and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedManifest>(bytes) }
+}

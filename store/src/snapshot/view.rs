@@ -1,0 +1,370 @@
+//! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
+
+use super::schema::{ArchivedLayerSegment, ArchivedManifest, NO_PARENT, u32s, u64s};
+use super::validate::check_dag;
+use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
+use crate::index::{ArchivedIndex, SpatialIndex};
+use crate::view::{EdgeRef, SceneView};
+use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
+use rkyv::collections::swiss_table::ArchivedHashMap;
+use rkyv::string::ArchivedString;
+use rkyv::vec::ArchivedVec;
+
+/// An archived inverted index: term -> `[start, end)` range of its posting column.
+type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>;
+
+/// A consistent cut of archived layers: the [`SceneView`] over validated bytes from a
+/// `.ygg` file or from shared memory.
+pub struct ArchivedScene<'a> {
+    manifest: &'a ArchivedManifest,
+    /// Layer segments in manifest order (ascending layer id).
+    layers: Vec<&'a ArchivedLayerSegment>,
+}
+
+/// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ArchivedNodeRef {
+    layer: u32,
+    row: u32,
+}
+
+impl<'a> ArchivedScene<'a> {
+    /// Joins a validated manifest with its validated layer segments, checking that they
+    /// form the cut the manifest names (same layers, same generations, same counts).
+    ///
+    /// # Errors
+    /// A description of the first mismatch.
+    pub fn new(
+        manifest: &'a ArchivedManifest,
+        layers: Vec<&'a ArchivedLayerSegment>,
+    ) -> Result<Self, String> {
+        if manifest.layers.len() != layers.len() {
+            return Err(format!(
+                "manifest lists {} layers, {} segments given",
+                manifest.layers.len(),
+                layers.len()
+            ));
+        }
+        for (i, (m, l)) in manifest.layers.iter().zip(&layers).enumerate() {
+            if m.id != l.layer
+                || m.generation != l.generation
+                || m.node_count.to_native() != l.ids.len() as u64
+            {
+                return Err(format!(
+                    "manifest entry {i} (layer {}, generation {}) does not match segment (layer {}, generation {})",
+                    m.id, m.generation, l.layer, l.generation
+                ));
+            }
+            if i > 0 && manifest.layers[i - 1].id >= m.id {
+                return Err("manifest layers are not ascending".into());
+            }
+        }
+        let known = |ids: &ArchivedVec<rkyv::rend::u32_le>| {
+            u32s(ids)
+                .iter()
+                .all(|id| manifest.layers.iter().any(|m| m.id == *id))
+        };
+        for m in manifest.layers.iter() {
+            if !known(&m.parents) || !known(&m.children) {
+                return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
+            }
+        }
+        check_dag(manifest)?;
+        for ls in manifest
+            .label_layers
+            .values()
+            .chain(manifest.key_layers.values())
+        {
+            if !known(ls) {
+                return Err("graph index names an unknown layer".into());
+            }
+        }
+        Ok(ArchivedScene { manifest, layers })
+    }
+
+    /// Joins a manifest with its layer segments that [`ArchivedScene::new`] already
+    /// accepted, without checking them again (a reader builds a view per query on a
+    /// snapshot it checked once). Given a cut `new` would refuse, queries may panic or
+    /// answer wrongly, but stay memory-safe.
+    pub fn new_prechecked(
+        manifest: &'a ArchivedManifest,
+        layers: Vec<&'a ArchivedLayerSegment>,
+    ) -> Self {
+        ArchivedScene { manifest, layers }
+    }
+
+    /// The manifest's generation.
+    pub fn generation(&self) -> u64 {
+        self.manifest.generation.to_native()
+    }
+
+    /// The generation of each layer in this cut, ascending by layer id.
+    pub fn layer_generations(&self) -> impl Iterator<Item = (LayerId, u64)> + '_ {
+        self.manifest
+            .layers
+            .iter()
+            .map(|m| (LayerId(m.id.to_native()), m.generation.to_native()))
+    }
+
+    /// The segment of a layer.
+    fn segment(&self, layer: LayerId) -> Option<(u32, &'a ArchivedLayerSegment)> {
+        let i = self
+            .manifest
+            .layers
+            .binary_search_by_key(&layer.0, |m| m.id.to_native())
+            .ok()?;
+        Some((i as u32, self.layers[i]))
+    }
+
+    fn seg(&self, n: ArchivedNodeRef) -> &'a ArchivedLayerSegment {
+        self.layers[n.layer as usize]
+    }
+
+    fn string(seg: &'a ArchivedLayerSegment, i: u32) -> &'a str {
+        seg.strings[i as usize].as_str()
+    }
+
+    fn range(offsets: &ArchivedVec<rkyv::rend::u32_le>, row: u32) -> std::ops::Range<usize> {
+        let o = u32s(offsets);
+        o[row as usize] as usize..o[row as usize + 1] as usize
+    }
+
+    fn postings(
+        &self,
+        layer: LayerId,
+        term: &str,
+        pick: fn(
+            &'a ArchivedLayerSegment,
+        ) -> (&'a ArchivedTermIndex, &'a ArchivedVec<rkyv::rend::u32_le>),
+    ) -> impl Iterator<Item = ArchivedNodeRef> + 'a {
+        let found = self.segment(layer).and_then(|(li, seg)| {
+            let (index, postings) = pick(seg);
+            let r = index.get(term)?;
+            Some((
+                li,
+                &u32s(postings)[r[0].to_native() as usize..r[1].to_native() as usize],
+            ))
+        });
+        found.into_iter().flat_map(|(li, rows)| {
+            rows.iter()
+                .map(move |&row| ArchivedNodeRef { layer: li, row })
+        })
+    }
+
+    fn graph_layers(
+        map: &'a ArchivedHashMap<ArchivedString, ArchivedVec<rkyv::rend::u32_le>>,
+        term: &str,
+    ) -> impl Iterator<Item = LayerId> + 'a {
+        map.get(term)
+            .into_iter()
+            .flat_map(|v| u32s(v).iter().map(|&l| LayerId(l)))
+    }
+}
+
+impl SceneView for ArchivedScene<'_> {
+    type NodeRef<'b>
+        = ArchivedNodeRef
+    where
+        Self: 'b;
+
+    fn layers(&self) -> impl Iterator<Item = LayerId> + '_ {
+        self.manifest
+            .layers
+            .iter()
+            .map(|m| LayerId(m.id.to_native()))
+    }
+
+    fn layer_name(&self, layer: LayerId) -> Option<&str> {
+        self.segment(layer).map(|(_, s)| s.name.as_str())
+    }
+
+    fn layer_by_name(&self, name: &str) -> Option<LayerId> {
+        self.manifest
+            .layers
+            .iter()
+            .find(|m| m.name == name)
+            .map(|m| LayerId(m.id.to_native()))
+    }
+
+    fn layer_children(&self, layer: LayerId) -> Vec<LayerId> {
+        self.segment(layer)
+            .map(|(i, _)| {
+                u32s(&self.manifest.layers[i as usize].children)
+                    .iter()
+                    .map(|&l| LayerId(l))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    fn layer_parents(&self, layer: LayerId) -> Vec<LayerId> {
+        self.segment(layer)
+            .map(|(i, _)| {
+                u32s(&self.manifest.layers[i as usize].parents)
+                    .iter()
+                    .map(|&l| LayerId(l))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    fn layer_len(&self, layer: LayerId) -> usize {
+        self.segment(layer).map_or(0, |(_, s)| s.ids.len())
+    }
+
+    fn layer_nodes(&self, layer: LayerId) -> impl Iterator<Item = ArchivedNodeRef> + '_ {
+        self.segment(layer).into_iter().flat_map(|(li, s)| {
+            (0..s.ids.len() as u32).map(move |row| ArchivedNodeRef { layer: li, row })
+        })
+    }
+
+    fn node(&self, id: NodeId) -> Option<ArchivedNodeRef> {
+        for (li, m) in self.manifest.layers.iter().enumerate() {
+            if !(m.min_id.to_native()..=m.max_id.to_native()).contains(&id.0) {
+                continue;
+            }
+            if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
+                return Some(ArchivedNodeRef {
+                    layer: li as u32,
+                    row: row as u32,
+                });
+            }
+        }
+        None
+    }
+
+    fn node_id(&self, n: ArchivedNodeRef) -> NodeId {
+        NodeId(u64s(&self.seg(n).ids)[n.row as usize])
+    }
+
+    fn node_layer(&self, n: ArchivedNodeRef) -> LayerId {
+        LayerId(self.seg(n).layer.to_native())
+    }
+
+    fn points(&self, n: ArchivedNodeRef) -> &[Point] {
+        let seg = self.seg(n);
+        let points: &[Point] = bytemuck::cast_slice(seg.points.as_slice());
+        &points[Self::range(&seg.point_offsets, n.row)]
+    }
+
+    fn parent(&self, n: ArchivedNodeRef) -> Option<NodeId> {
+        let p = u64s(&self.seg(n).parents)[n.row as usize];
+        (p != NO_PARENT).then_some(NodeId(p))
+    }
+
+    fn children(&self, n: ArchivedNodeRef) -> &[NodeId] {
+        let seg = self.seg(n);
+        let children: &[NodeId] = bytemuck::cast_slice(seg.children.as_slice());
+        &children[Self::range(&seg.child_offsets, n.row)]
+    }
+
+    fn aabb(&self, n: ArchivedNodeRef) -> Option<Aabb> {
+        let seg = self.seg(n);
+        let i = u32s(&seg.aabb_rows).binary_search(&n.row).ok()?;
+        let b: &[[f32; 6]] = bytemuck::cast_slice(seg.aabbs.as_slice());
+        Some(Aabb::from_array(b[i]))
+    }
+
+    fn out_edges<'b>(&'b self, n: ArchivedNodeRef) -> impl Iterator<Item = EdgeRef<'b>> + 'b {
+        let seg = self.seg(n);
+        let ids = u64s(&seg.ids);
+        let source = NodeId(ids[n.row as usize]);
+        let r = Self::range(&seg.out_offsets, n.row);
+        let targets = &u32s(&seg.out_targets)[r.clone()];
+        let descs = &u32s(&seg.out_descriptions)[r];
+        targets.iter().zip(descs).map(move |(&t, &d)| EdgeRef {
+            source,
+            target: NodeId(ids[t as usize]),
+            description: Self::string(seg, d),
+        })
+    }
+
+    fn in_edges<'b>(&'b self, n: ArchivedNodeRef) -> impl Iterator<Item = EdgeRef<'b>> + 'b {
+        let seg = self.seg(n);
+        let ids = u64s(&seg.ids);
+        let target = NodeId(ids[n.row as usize]);
+        let r = Self::range(&seg.in_offsets, n.row);
+        let sources = &u32s(&seg.in_sources)[r.clone()];
+        let descs = &u32s(&seg.in_descriptions)[r];
+        sources.iter().zip(descs).map(move |(&s, &d)| EdgeRef {
+            source: NodeId(ids[s as usize]),
+            target,
+            description: Self::string(seg, d),
+        })
+    }
+
+    fn labels<'b>(&'b self, n: ArchivedNodeRef) -> impl Iterator<Item = &'b str> + 'b {
+        let seg = self.seg(n);
+        u32s(&seg.labels)[Self::range(&seg.label_offsets, n.row)]
+            .iter()
+            .map(move |&s| Self::string(seg, s))
+    }
+
+    fn features<'b>(
+        &'b self,
+        n: ArchivedNodeRef,
+    ) -> impl Iterator<Item = (&'b str, FeatureRef<'b>)> + 'b {
+        let seg = self.seg(n);
+        let r = Self::range(&seg.feature_offsets, n.row);
+        let keys = &u32s(&seg.feature_keys)[r.clone()];
+        let kinds = &seg.feature_kinds[r.clone()];
+        let bits = &u64s(&seg.feature_bits)[r];
+        keys.iter()
+            .zip(kinds)
+            .zip(bits)
+            .map(move |((&k, &kind), &b)| {
+                let v = match kind {
+                    FEATURE_STR => FeatureRef::Str(Self::string(seg, b as u32)),
+                    FEATURE_INT => FeatureRef::Int(b as i64),
+                    FEATURE_FLOAT => FeatureRef::Float(f64::from_bits(b)),
+                    _ => FeatureRef::Bool(b != 0),
+                };
+                (Self::string(seg, k), v)
+            })
+    }
+
+    fn layers_with_label(&self, label: &str) -> impl Iterator<Item = LayerId> {
+        Self::graph_layers(&self.manifest.label_layers, label)
+    }
+
+    fn layers_with_key(&self, key: &str) -> impl Iterator<Item = LayerId> {
+        Self::graph_layers(&self.manifest.key_layers, key)
+    }
+
+    fn nodes_with_label(
+        &self,
+        layer: LayerId,
+        label: &str,
+    ) -> impl Iterator<Item = ArchivedNodeRef> {
+        self.postings(layer, label, |s| (&s.label_index, &s.label_postings))
+    }
+
+    fn nodes_with_key(&self, layer: LayerId, key: &str) -> impl Iterator<Item = ArchivedNodeRef> {
+        self.postings(layer, key, |s| (&s.key_index, &s.key_postings))
+    }
+
+    fn layer_generation(&self, layer: LayerId) -> Option<u64> {
+        self.segment(layer).map(|(_, s)| s.generation.to_native())
+    }
+
+    fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
+        let (_, seg) = self.segment(layer)?;
+        // `check_layer` bounded the tree's items by the layer's rows.
+        Some(ArchivedIndex::new(
+            seg.layer_index.as_ref()?,
+            u64s(&seg.ids),
+        ))
+    }
+
+    fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
+        let n = self.node(node)?;
+        let seg = self.seg(n);
+        let at = seg
+            .node_indexes
+            .binary_search_by_key(&node.0, |ni| ni.root.to_native())
+            .ok()?;
+        let ni = &seg.node_indexes[at];
+        // `check_layer` bounded the tree's items by the index's id table.
+        Some(ArchivedIndex::new(&ni.tree, u64s(&ni.ids)))
+    }
+}
