@@ -14,7 +14,7 @@
 //!   (exactly the test of [`ygg_store::query::nodes_within_radius`]).
 //! * [`Objects::visible_objects`]: every object with a vertex `v` such that
 //!   `|v - eye| <= range` and the angle between `v - eye` and `dir` is at most the
-//!   half-angle (exactly the test of [`ygg_store::query::visible`] with a [`ConeView`]).
+//!   half-angle (exactly the test of [`ygg_store::query::visible`] with a [`ygg_store::query::ConeView`]).
 //! * [`Objects::objects_with_label`]: every object node carrying the label. Object
 //!   nodes are the nodes of the object layers (those whose
 //!   [`LayerRole::holds_objects`]): `OBJECTS` in vanilla, `room:<id>/claimed-object` in

@@ -13,6 +13,10 @@ impl<V: SceneView> Objects<'_, V> {
     /// (zero or non-finite `dir`), [`SpatialQueryError::InvalidRange`], and
     /// [`ObjectQueryError::InvalidHalfAngleDeg`] outside `[0, 180]`.
     ///
+    /// [`SpatialQueryError::NonFinitePoint`]: ygg_store::query::SpatialQueryError::NonFinitePoint
+    /// [`SpatialQueryError::InvalidDirection`]: ygg_store::query::SpatialQueryError::InvalidDirection
+    /// [`SpatialQueryError::InvalidRange`]: ygg_store::query::SpatialQueryError::InvalidRange
+    ///
     /// # Complexity
     /// Classifies each object's box, then its up to eight part boxes (computed by the
     /// first call, one pass over the claimed vertices), against the cone with margins far above rounding: a box
