@@ -2,7 +2,8 @@
 //! and the object queries.
 //!
 //! * [`layout::build`] turns a Spark-DSG graph into a [`ygg_store::SceneGraph`] in one of
-//!   the paper's layouts ([`layout::Layout`]).
+//!   the paper's layouts ([`layout::Layout`]). [`layout::LayerRole`] says what each
+//!   layer of such a scene holds.
 //! * [`objects::Objects`] answers the object-query contract of `ygg-reader query` on any
 //!   view of such a scene, live or archived.
 //! * [`replay::SlamReplay`] drives a SLAM-like stream of mutations over a built scene.

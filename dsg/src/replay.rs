@@ -3,7 +3,7 @@
 //! room. It drives `ygg-writer serve --rate` and the demo.
 
 use crate::NodeSymbol;
-use crate::layout;
+use crate::layout::{self, LayerRole};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use ygg_store::query::{self, children, nearest_nodes};
@@ -48,16 +48,15 @@ const STEP: f32 = 0.05;
 impl SlamReplay {
     /// A stream over `g` from a fixed seed.
     pub fn new(g: &SceneGraph, seed: u64) -> Self {
-        let agents = g.layer_by_name("AGENTS");
-        let places = g.layer_by_name("PLACES");
+        let agents = layout::layer_with_role(g, LayerRole::Agents);
+        let places = layout::layer_with_role(g, LayerRole::Places);
         let last_pose = agents.and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).max());
         let next_pose = last_pose.map_or(0, |p| NodeSymbol(p.0).index() + 1);
         let position = last_pose
             .and_then(|p| g.node(p))
             .and_then(|n| g.points(n).first().copied())
             .unwrap_or([1.0, 12.5, 1.0]);
-        let rooms: Vec<(NodeId, [f32; 6])> = g
-            .layer_by_name("ROOMS")
+        let rooms: Vec<(NodeId, [f32; 6])> = layout::layer_with_role(g, LayerRole::Rooms)
             .map(|l| {
                 g.layer_nodes(l)
                     .filter_map(|n| Some((g.node_id(n), g.aabb(n)?.to_array())))
@@ -190,8 +189,7 @@ impl SlamReplay {
             return Ok(0);
         }
         let (room, b) = self.rooms[(self.tick / MESH_EVERY) as usize % self.rooms.len()];
-        let target = g
-            .layer_by_name(&format!("room:{}/unclaimed-mesh", room.0))
+        let target = layout::layer_with_role(g, LayerRole::UnclaimedMesh { room })
             .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
         let Some(target) = target else { return Ok(0) };
         let mut points = g
@@ -217,13 +215,12 @@ impl SlamReplay {
         }
         let (room, b) = self.rooms[self.rng.gen_range(0..self.rooms.len())];
         let (Some(objects), Some(mesh)) = (
-            g.layer_by_name(&layout::claimed_object_layer_name(room)),
-            g.layer_by_name(&layout::claimed_mesh_layer_name(room)),
+            layout::layer_with_role(g, LayerRole::ClaimedObjects { room }),
+            layout::layer_with_role(g, LayerRole::ClaimedMesh { room }),
         ) else {
             return Ok(0);
         };
-        let claimed = g
-            .layer_by_name(&format!("room:{}", room.0))
+        let claimed = layout::layer_with_role(g, LayerRole::RoomGroups { room })
             .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
         let Some(claimed) = claimed else { return Ok(0) };
         let object = NodeId(NodeSymbol::new(b'O', self.next_object).0);

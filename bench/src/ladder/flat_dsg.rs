@@ -4,11 +4,9 @@
 //! that objects index into with `mesh_connections`.
 
 use super::Answer;
-use super::workload::Query;
-use super::ygg::cone_view;
+use super::workload::{Query, Scan};
 use ygg_dsg::{DsgGraph, NodeKind};
-use ygg_store::query::within_radius;
-use ygg_store::{Point, distance_squared};
+use ygg_store::Point;
 
 /// One node, as Spark-DSG stores it.
 struct FlatNode {
@@ -110,54 +108,15 @@ impl FlatDsg {
     /// Answers one workload query by brute force.
     pub fn answer(&self, q: &Query) -> Answer {
         match q {
-            Query::Nearest { room, point } => {
-                let mut best: Option<(f32, u64)> = None;
+            Query::Nearest { room, .. }
+            | Query::Within { room, .. }
+            | Query::Visible { room, .. } => {
+                let mut scan = Scan::new(q);
                 for o in self.room_objects(*room) {
-                    for &v in &o.mesh_connections {
-                        let d = distance_squared(&self.mesh[v as usize], point);
-                        if best.is_none_or(|(bd, bid)| d < bd || (d == bd && o.id < bid)) {
-                            best = Some((d, o.id));
-                        }
-                    }
+                    let points = o.mesh_connections.iter().map(|&v| &self.mesh[v as usize]);
+                    scan.object(o.id, points);
                 }
-                best.map(|b| b.1).into_iter().collect()
-            }
-            Query::Within {
-                room,
-                point,
-                radius,
-            } => {
-                let mut out: Answer = self
-                    .room_objects(*room)
-                    .filter(|o| {
-                        o.mesh_connections
-                            .iter()
-                            .any(|&v| within_radius(&self.mesh[v as usize], point, *radius))
-                    })
-                    .map(|o| o.id)
-                    .collect();
-                out.sort_unstable();
-                out
-            }
-            Query::Visible {
-                room,
-                eye,
-                dir,
-                half_angle_deg,
-                range,
-            } => {
-                let cone = cone_view(eye, dir, *half_angle_deg, *range);
-                let mut out: Answer = self
-                    .room_objects(*room)
-                    .filter(|o| {
-                        o.mesh_connections
-                            .iter()
-                            .any(|&v| cone.contains(&self.mesh[v as usize]).unwrap_or(false))
-                    })
-                    .map(|o| o.id)
-                    .collect();
-                out.sort_unstable();
-                out
+                scan.answer()
             }
             Query::Label { label } => {
                 let mut out: Answer = self

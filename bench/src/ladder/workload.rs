@@ -4,8 +4,12 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Value, json};
+use ygg_dsg::objects::{ObjectQuery, cone_view};
 use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::Point;
+use ygg_store::query::{CheckedCone, within_radius};
+
+use super::Answer;
 
 /// Radii of Q1b, metres.
 pub const RADII: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
@@ -43,6 +47,42 @@ impl Query {
             Query::Within { radius, .. } => format!("Q1b@{radius}"),
             Query::Visible { .. } => "Q2".into(),
             Query::Label { label } => format!("Q3:{label}"),
+        }
+    }
+
+    /// The room the query is asked in (`None` for Q3, which asks the whole scene).
+    pub fn room(&self) -> Option<u64> {
+        match self {
+            Query::Nearest { room, .. }
+            | Query::Within { room, .. }
+            | Query::Visible { room, .. } => Some(*room),
+            Query::Label { .. } => None,
+        }
+    }
+
+    /// The query as the object-query contract ([`ObjectQuery`]) asks it, without the room.
+    pub fn to_object_query(&self) -> ObjectQuery {
+        match self {
+            Query::Nearest { point, .. } => ObjectQuery::NearestObject { point: *point },
+            Query::Within { point, radius, .. } => ObjectQuery::ObjectsWithin {
+                point: *point,
+                radius: *radius,
+            },
+            Query::Visible {
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+                ..
+            } => ObjectQuery::VisibleObjects {
+                eye: *eye,
+                dir: *dir,
+                half_angle_deg: *half_angle_deg,
+                range: *range,
+            },
+            Query::Label { label } => ObjectQuery::ObjectsWithLabel {
+                label: label.clone(),
+            },
         }
     }
 
@@ -162,5 +202,81 @@ impl Workload {
             "queries": self.queries.iter().enumerate().map(|(i, q)| q.to_json(i)).collect::<Vec<_>>(),
             "update": {"object": self.update_object, "translation": self.update_translation},
         })
+    }
+}
+
+/// A brute-force answer to a spatial query (Q1a, Q1b, Q2), as the dsg and vanilla rungs
+/// compute it: feed it every object of the query's room with its points
+/// ([`Scan::object`]), then take [`Scan::answer`]. The tests are the store's: ties to
+/// the smaller id, [`within_radius`], and the contract's cone ([`cone_view`]).
+pub struct Scan<'q> {
+    query: &'q Query,
+    /// Q2's cone, checked once (`None` for an invalid cone, which sees nothing).
+    cone: Option<CheckedCone>,
+    /// Q1a: the closest point so far (squared distance) and its object.
+    best: Option<(f32, u64)>,
+    /// Q1b, Q2: the objects found.
+    found: Answer,
+}
+
+impl<'q> Scan<'q> {
+    /// A scan answering `query`.
+    pub fn new(query: &'q Query) -> Self {
+        let cone = match query {
+            Query::Visible {
+                eye,
+                dir,
+                half_angle_deg,
+                range,
+                ..
+            } => cone_view(*eye, *dir, *half_angle_deg, *range)
+                .ok()
+                .and_then(|c| c.checked().ok()),
+            _ => None,
+        };
+        Scan {
+            query,
+            cone,
+            best: None,
+            found: Vec::new(),
+        }
+    }
+
+    /// Takes object `id` with (some of) its points into account; an object may come
+    /// several times.
+    pub fn object<'p>(&mut self, id: u64, points: impl IntoIterator<Item = &'p Point>) {
+        let mut points = points.into_iter();
+        let hit = match self.query {
+            Query::Nearest { point, .. } => {
+                for p in points {
+                    let d = ygg_store::distance_squared(p, point);
+                    if self
+                        .best
+                        .is_none_or(|(bd, bid)| d < bd || (d == bd && id < bid))
+                    {
+                        self.best = Some((d, id));
+                    }
+                }
+                false
+            }
+            Query::Within { point, radius, .. } => points.any(|p| within_radius(p, point, *radius)),
+            Query::Visible { .. } => self
+                .cone
+                .as_ref()
+                .is_some_and(|cone| points.any(|p| cone.contains(p))),
+            Query::Label { .. } => false,
+        };
+        if hit {
+            self.found.push(id);
+        }
+    }
+
+    /// The answer: object ids ascending.
+    pub fn answer(self) -> Answer {
+        let mut out: Answer = self.best.map(|(_, id)| id).into_iter().collect();
+        out.extend(self.found);
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 }

@@ -16,7 +16,7 @@ mod spatial;
 mod traverse;
 
 #[doc(inline)]
-pub use fov::{ConeView, index_sees, visible};
+pub use fov::{BoxSight, CheckedCone, ConeView, index_sees, visible};
 #[doc(inline)]
 pub use pattern::{
     edges_from, edges_matching, edges_to, nodes_having, nodes_matching, nodes_with_label,

@@ -12,6 +12,15 @@
 //! node(s) holding the vertices it claims; object geometry is those vertices. Mesh
 //! node ids are ordered like their objects' ids, so "ties go to the smaller node id"
 //! on mesh nodes means "ties go to the smaller object id".
+//!
+//! [`LayerRole`] says what each layer of a built scene holds: it writes the layer names
+//! above ([`LayerRole::name`]) and reads them back ([`LayerRole::of_name`],
+//! [`layer_roles`]).
+
+mod role;
+
+#[doc(inline)]
+pub use self::role::{LayerRole, layer_roles, layer_with_role};
 
 use crate::{DsgGraph, NodeKind};
 use rustc_hash::FxHashMap;
@@ -106,32 +115,20 @@ fn prefixed(prefix: u64, index: u64) -> NodeId {
     NodeId(prefix << 56 | index)
 }
 
-/// Name of the layer holding a room's claimed mesh in per-room layouts.
+/// Name of the layer holding a room's claimed mesh in per-room layouts: the name of
+/// [`LayerRole::ClaimedMesh`].
 pub fn claimed_mesh_layer_name(room: NodeId) -> String {
-    format!("room:{}/claimed-mesh", room.0)
+    LayerRole::ClaimedMesh { room }.name()
 }
 
-/// Name of the layer holding a room's objects in per-room layouts.
-pub fn claimed_object_layer_name(room: NodeId) -> String {
-    format!("room:{}/claimed-object", room.0)
-}
-
-/// Name of vanilla's mesh layer.
-pub const MESH_LAYER: &str = "MESH";
-
-/// The layers holding object geometry in a scene built by [`build`], with the room each
-/// serves (`None` for vanilla's single mesh layer). Works on any view, so readers of a
-/// snapshot find them from layer names alone.
+/// The layers holding object geometry in a scene built by [`build`] (those whose
+/// [`LayerRole::holds_object_mesh`]), ascending, with the room each serves (`None` for
+/// vanilla's single mesh layer). Works on any view, so readers of a snapshot find them
+/// from layer names alone.
 pub fn object_mesh_layers<V: SceneView>(view: &V) -> Vec<(LayerId, Option<NodeId>)> {
-    view.layers()
-        .filter_map(|l| {
-            let name = view.layer_name(l)?;
-            if name == MESH_LAYER {
-                return Some((l, None));
-            }
-            let room = name.strip_prefix("room:")?.strip_suffix("/claimed-mesh")?;
-            Some((l, Some(NodeId(room.parse().ok()?))))
-        })
+    layer_roles(view)
+        .filter(|(_, role)| role.holds_object_mesh())
+        .map(|(l, role)| (l, role.room()))
         .collect()
 }
 
@@ -149,6 +146,7 @@ impl Builder<'_> {
         }
     }
 
+    /// The layer called `name`, added on first use.
     fn layer(&mut self, name: &str) -> Result<LayerId, LayoutError> {
         if let Some(&l) = self.layers.get(name) {
             return Ok(l);
@@ -156,6 +154,11 @@ impl Builder<'_> {
         let l = self.g.add_layer(name).map_err(|e| self.err(e))?;
         self.layers.insert(name.to_owned(), l);
         Ok(l)
+    }
+
+    /// The layer holding `role`, added on first use.
+    fn role_layer(&mut self, role: LayerRole) -> Result<LayerId, LayoutError> {
+        self.layer(&role.name())
     }
 
     fn dag(&mut self, parent: LayerId, child: LayerId) -> Result<(), LayoutError> {
@@ -249,7 +252,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         let id = NodeId(n.id);
         let layer = if layout.per_room() && n.kind == NodeKind::Object {
             let room = object_room[&n.id].expect("per-room layouts have rooms");
-            b.layer(&claimed_object_layer_name(NodeId(room)))?
+            b.role_layer(LayerRole::ClaimedObjects { room: NodeId(room) })?
         } else {
             b.layers[&layer_name[&n.layer]]
         };
@@ -305,10 +308,10 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
                 .expect("room added");
         for (i, r) in rooms.iter().enumerate() {
             let room = NodeId(r.id);
-            let group_layer = b.layer(&format!("room:{}", r.id))?;
-            let objects = b.layer(&claimed_object_layer_name(room))?;
-            let claimed_mesh = b.layer(&claimed_mesh_layer_name(room))?;
-            let unclaimed_mesh = b.layer(&format!("room:{}/unclaimed-mesh", r.id))?;
+            let group_layer = b.role_layer(LayerRole::RoomGroups { room })?;
+            let objects = b.role_layer(LayerRole::ClaimedObjects { room })?;
+            let claimed_mesh = b.role_layer(LayerRole::ClaimedMesh { room })?;
+            let unclaimed_mesh = b.role_layer(LayerRole::UnclaimedMesh { room })?;
             b.dag(rooms_layer, group_layer)?;
             b.dag(group_layer, objects)?;
             b.dag(objects, claimed_mesh)?;
@@ -359,7 +362,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         let vanilla_mesh = if layout.per_room() {
             None
         } else {
-            Some(b.layer(MESH_LAYER)?)
+            Some(b.role_layer(LayerRole::Mesh)?)
         };
         for (rank, o) in sorted_objects.iter().enumerate() {
             let mut vertices: Vec<u32> = o.mesh_connections.clone();
@@ -380,9 +383,9 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             let object = NodeId(o.id);
             let layer = match vanilla_mesh {
                 Some(l) => l,
-                None => b.layer(&claimed_mesh_layer_name(NodeId(
-                    object_room[&o.id].expect("rooms"),
-                )))?,
+                None => b.role_layer(LayerRole::ClaimedMesh {
+                    room: NodeId(object_room[&o.id].expect("rooms")),
+                })?,
             };
             let object_layer =
                 b.g.node(object)
@@ -422,7 +425,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         for (i, (room, points)) in per_room.into_iter().enumerate() {
             let (layer, parent) = match room {
                 Some(r) => (
-                    b.layer(&format!("room:{r}/unclaimed-mesh"))?,
+                    b.role_layer(LayerRole::UnclaimedMesh { room: NodeId(r) })?,
                     Some(room_groups[&r].1),
                 ),
                 None => (vanilla_mesh.expect("vanilla has a mesh layer"), None),
@@ -460,7 +463,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             b.edit(r)?;
         }
         for r in &rooms {
-            let layer = b.layers[&claimed_mesh_layer_name(NodeId(r.id))];
+            let layer = b.role_layer(LayerRole::ClaimedMesh { room: NodeId(r.id) })?;
             let res = b.g.enable_layer_index(layer);
             b.edit(res)?;
         }

@@ -1,0 +1,271 @@
+//! The object catalog: [`Objects`] finds the object and object-mesh layers of a view
+//! and the objects that claim geometry, once for a batch of queries.
+
+use crate::layout::{LayerRole, layer_roles};
+use rustc_hash::FxHashSet;
+use std::sync::OnceLock;
+use ygg_store::{Aabb, LayerId, NodeId, SceneView};
+
+/// An object with claimed geometry: its id, a box around that geometry (when known),
+/// and its mesh nodes when there are few of them (see [`MAX_PART_CHILDREN`]).
+#[derive(Clone, Debug)]
+pub(super) struct Claimant<R> {
+    pub(super) id: NodeId,
+    pub(super) bbox: Option<Aabb>,
+    pub(super) mesh: Vec<R>,
+    /// Whether the object keeps a box and a node index and every node below it is one
+    /// of its mesh nodes: its box then bounds exactly its claimed vertices, and
+    /// [`ygg_store::query::nearest_in_subtree`] searches exactly them.
+    pub(super) indexed_mesh: bool,
+}
+
+/// Objects with more mesh children than this (saffron's one node per vertex) get no
+/// part boxes when they keep a box of their own: finding their points would cost a
+/// node lookup per vertex.
+const MAX_PART_CHILDREN: usize = 8;
+
+/// The object queries over one view of a scene built by [`crate::layout::build`].
+///
+/// [`Objects::new`] finds the object and object-mesh layers once (from layer names and
+/// the layer DAG) and the objects that claim geometry; keep it for a batch of queries.
+/// It borrows the view and holds no copy of the scene's geometry.
+pub struct Objects<'a, V: SceneView> {
+    pub(super) view: &'a V,
+    /// Layers holding object nodes, ascending.
+    pub(super) object_layers: Vec<LayerId>,
+    /// Layers holding object geometry (mesh nodes nested under objects), ascending.
+    pub(super) mesh_layers: Vec<LayerId>,
+    /// A box around every point of each mesh layer (same order; `None` when empty).
+    pub(super) layer_boxes: Vec<Option<Aabb>>,
+    /// Objects with at least one mesh node, ascending by id.
+    pub(super) claimants: Vec<Claimant<V::NodeRef<'a>>>,
+    /// Part boxes of each claimant (same order; empty when not kept), computed by the
+    /// first visibility query.
+    pub(super) parts: OnceLock<Vec<Vec<Aabb>>>,
+    /// The ids of `claimants`.
+    pub(super) claimant_ids: FxHashSet<NodeId>,
+    /// With [`Objects::in_subtree`]: every object node kept (with geometry or not).
+    pub(super) kept: Option<FxHashSet<NodeId>>,
+}
+
+/// Whether `name` names an object layer (one whose [`LayerRole::holds_objects`]):
+/// `OBJECTS` (vanilla) or `room:<id>/claimed-object` (per-room layouts).
+pub fn is_object_layer_name(name: &str) -> bool {
+    LayerRole::of_name(name).is_some_and(|role| role.holds_objects())
+}
+
+impl<'a, V: SceneView> Objects<'a, V> {
+    /// Finds the object layers, the object-mesh layers and the objects claiming geometry
+    /// of `view`.
+    ///
+    /// # Complexity
+    /// O(layers + objects + their children) for the object layers, and one pass over
+    /// the mesh layers' nodes for a box around each layer (their boxes where the layout
+    /// keeps them, their points otherwise).
+    pub fn new(view: &'a V) -> Self {
+        Self::build(view, false, |_| true)
+    }
+
+    /// Like [`Objects::new`], restricted to the objects in the sub-tree of `root` (a
+    /// room, say): every query then answers among those objects only.
+    ///
+    /// # Examples
+    /// ```
+    /// # use ygg_dsg::{self as dsg, layout::{self, Layout}, objects::Objects}; use ygg_store::SceneView;
+    /// let office = dsg::office::generate(dsg::office::OfficeParams { seed: 7, scale: 0.02 });
+    /// let graph = layout::build(&office, Layout::Mint).unwrap();
+    /// let everywhere = Objects::new(&graph).objects_within([20.0, 12.0, 1.5], 1000.0).unwrap();
+    /// let room = layout::object_mesh_layers(&graph)[0].1.expect("per-room layout");
+    /// let here = Objects::in_subtree(&graph, room).objects_within([20.0, 12.0, 1.5], 1000.0).unwrap();
+    /// assert!(!here.is_empty() && here.len() < everywhere.len());
+    /// assert!(here.iter().all(|o| everywhere.contains(o)));
+    /// ```
+    pub fn in_subtree(view: &'a V, root: NodeId) -> Self {
+        Self::build(view, true, |n| {
+            let mut cur = view.parent(n);
+            while let Some(p) = cur {
+                if p == root {
+                    return true;
+                }
+                cur = view.node(p).and_then(|x| view.parent(x));
+            }
+            false
+        })
+    }
+
+    /// [`Objects::new`] over the object nodes `keep` accepts; `scoped`: keep only the
+    /// mesh layers holding their geometry.
+    fn build(view: &'a V, scoped: bool, keep: impl Fn(V::NodeRef<'a>) -> bool) -> Self {
+        let roles: Vec<(LayerId, LayerRole)> = layer_roles(view).collect();
+        let mut mesh_layers: Vec<LayerId> = roles
+            .iter()
+            .filter(|(_, role)| role.holds_object_mesh())
+            .map(|&(l, _)| l)
+            .collect();
+        mesh_layers.sort_unstable();
+        mesh_layers.dedup();
+        // Object layers by role, plus any DAG parent of an object-mesh layer (the layer
+        // objects live in, whatever the source file called it).
+        let mut object_layers: Vec<LayerId> = roles
+            .iter()
+            .filter(|(_, role)| role.holds_objects())
+            .map(|&(l, _)| l)
+            .chain(mesh_layers.iter().flat_map(|&m| view.layer_parents(m)))
+            .collect();
+        object_layers.sort_unstable();
+        object_layers.dedup();
+        let mut claimants = Vec::new();
+        // The mesh layers holding the kept objects' mesh nodes.
+        let mut used_layers = Vec::new();
+        let mut kept = FxHashSet::default();
+        for &layer in &object_layers {
+            for n in view.layer_nodes(layer).filter(|&n| keep(n)) {
+                if scoped {
+                    kept.insert(view.node_id(n));
+                }
+                // Every mesh child when there are few of them (one per object except in
+                // saffron) or the object keeps no box; else the first, to know it has one.
+                let children = view.children(n);
+                let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
+                let mut mesh: Vec<V::NodeRef<'a>> = Vec::new();
+                let mut only_mesh = true;
+                for &c in children {
+                    let Some(c) = view.node(c) else {
+                        only_mesh = false;
+                        continue;
+                    };
+                    let l = view.node_layer(c);
+                    if mesh_layers.binary_search(&l).is_err() {
+                        only_mesh = false;
+                        continue;
+                    }
+                    if all || mesh.is_empty() {
+                        mesh.push(c);
+                    }
+                    if used_layers.last() != Some(&l) {
+                        used_layers.push(l);
+                    }
+                    only_mesh &= view.children(c).is_empty();
+                }
+                if mesh.is_empty() {
+                    continue;
+                }
+                let indexed_mesh = only_mesh
+                    && view.aabb(n).is_some()
+                    && view.node_index(view.node_id(n)).is_some();
+                // The object's own box (mint, saffron) holds its whole sub-tree; else the
+                // box around its mesh nodes' points.
+                let bbox = view.aabb(n).or_else(|| {
+                    mesh.iter()
+                        .filter_map(|&m| Aabb::from_points(view.points(m)))
+                        .reduce(|a, b| a.union(&b))
+                });
+                claimants.push(Claimant {
+                    id: view.node_id(n),
+                    bbox,
+                    mesh: if all { mesh } else { Vec::new() },
+                    indexed_mesh,
+                });
+            }
+        }
+        if scoped {
+            // Only the layers holding the kept objects' geometry.
+            used_layers.sort_unstable();
+            used_layers.dedup();
+            mesh_layers = used_layers;
+        }
+        claimants.sort_unstable_by_key(|c| c.id);
+        claimants.dedup_by_key(|c| c.id);
+        let claimant_ids = claimants.iter().map(|c| c.id).collect();
+        let layer_boxes = mesh_layers
+            .iter()
+            .map(|&l| {
+                view.layer_nodes(l)
+                    .filter_map(|n| view.aabb(n).or_else(|| Aabb::from_points(view.points(n))))
+                    .reduce(|a, b| a.union(&b))
+            })
+            .collect();
+        Objects {
+            view,
+            object_layers,
+            mesh_layers,
+            layer_boxes,
+            claimants,
+            parts: OnceLock::new(),
+            claimant_ids,
+            kept: scoped.then_some(kept),
+        }
+    }
+
+    /// The view queried.
+    pub fn view(&self) -> &'a V {
+        self.view
+    }
+
+    /// The layers holding object nodes, ascending.
+    pub fn object_layers(&self) -> &[LayerId] {
+        &self.object_layers
+    }
+
+    /// The layers holding object geometry, ascending.
+    pub fn mesh_layers(&self) -> &[LayerId] {
+        &self.mesh_layers
+    }
+
+    /// Every object node, ascending.
+    pub fn objects(&self) -> Vec<NodeId> {
+        let mut ids: Vec<NodeId> = self
+            .object_layers
+            .iter()
+            .flat_map(|&l| self.view.layer_nodes(l).map(|n| self.view.node_id(n)))
+            .filter(|id| self.is_kept(*id))
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    }
+
+    /// Whether object `id` is among those queried (always, unless scoped).
+    pub(super) fn is_kept(&self, id: NodeId) -> bool {
+        self.kept.as_ref().is_none_or(|k| k.contains(&id))
+    }
+
+    /// The objects that claim at least one mesh vertex, ascending.
+    pub fn objects_with_geometry(&self) -> impl Iterator<Item = NodeId> + '_ {
+        self.claimants.iter().map(|c| c.id)
+    }
+
+    /// The object owning mesh node `mesh` (its parent, when that is an object with
+    /// geometry).
+    pub(super) fn owner(&self, mesh: NodeId) -> Option<NodeId> {
+        let parent = self.view.parent(self.view.node(mesh)?)?;
+        self.claimant_ids.contains(&parent).then_some(parent)
+    }
+
+    /// Every object node carrying `label`, ascending (O(1) for a label no node has).
+    pub fn objects_with_label(&self, label: &str) -> Vec<NodeId> {
+        let mut out: Vec<NodeId> = self
+            .view
+            .layers_with_label(label)
+            .filter(|l| self.object_layers.binary_search(l).is_ok())
+            .flat_map(|l| {
+                self.view
+                    .nodes_with_label(l, label)
+                    .map(|n| self.view.node_id(n))
+            })
+            .filter(|id| self.is_kept(*id))
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Whether node `id` lies in an object-mesh layer.
+    pub(super) fn is_mesh_node(&self, id: NodeId) -> bool {
+        self.view.node(id).is_some_and(|n| {
+            self.mesh_layers
+                .binary_search(&self.view.node_layer(n))
+                .is_ok()
+        })
+    }
+}
