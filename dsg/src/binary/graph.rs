@@ -104,7 +104,7 @@ pub(super) fn read_body<'a>(
         }
         (Some(keys), None)
     };
-    let node_types = type_table(c, "node_types", |n| NodeLayout::from_name(n))?;
+    let node_types = type_table(c, "node_types", NodeLayout::from_name)?;
     let edge_types = type_table(c, "edge_types", |n| {
         (n == EDGE_ATTRIBUTES.as_bytes()).then_some(EDGE_ATTRIBUTES)
     })?;

@@ -89,6 +89,12 @@ impl Writer {
         self.buf.extend_from_slice(s.as_bytes());
     }
 
+    /// NIL (an empty `std::optional`).
+    #[cfg(test)]
+    pub(super) fn nil(&mut self) {
+        self.tag(Tag::Nil);
+    }
+
     pub(super) fn dyn_start(&mut self) {
         self.tag(Tag::ArrStart);
     }
