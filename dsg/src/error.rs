@@ -8,8 +8,9 @@ use super::symbol::describe_id;
 /// Every variant names the file; variants about one node name its id (shown as
 /// `O(3) [5692549928996306947]`), and field paths look like
 /// `attributes.position[1]` or `mesh.points[12]`. Errors found while parsing carry
-/// the JSON line and column; errors found by the checks after parsing (dangling
-/// edges, duplicates, ranges) name the list index instead.
+/// the JSON line and column (binary files: the byte offset); errors found by the
+/// checks after parsing (dangling edges, duplicates, ranges) name the list index
+/// instead.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DsgImportError {
@@ -187,6 +188,24 @@ pub enum DsgImportError {
         /// Number of mesh vertices.
         vertex_count: usize,
     },
+    /// Spark-DSG binary data that does not fit the format: a wrong tag, a length past
+    /// the end, an impossible value, an unknown attribute type (attribute blocks have
+    /// no length prefix, so it cannot be skipped), trailing bytes, or an encoding
+    /// Spark-DSG does not read (no header, older than 1.0.2).
+    #[error("{file}: byte {offset}: {}{field}: {message}", at_node(.node))]
+    Binary {
+        /// File name.
+        file: String,
+        /// Byte offset of the bad value in the file (in the buffer, for a header-less
+        /// body).
+        offset: usize,
+        /// The node being decoded, when known.
+        node: Option<u64>,
+        /// Field path, e.g. `nodes[3].attributes.bounding_box` or `mesh.faces[7]`.
+        field: String,
+        /// What was wrong.
+        message: String,
+    },
     /// `mesh.labels` does not have one entry per vertex.
     #[error("{file}: mesh.labels has {labels} entries for {vertex_count} vertices")]
     MeshLabelCount {
@@ -218,7 +237,8 @@ impl DsgImportError {
             | Self::NonFinite { file, .. }
             | Self::MeshConnectionOutOfRange { file, .. }
             | Self::FaceOutOfRange { file, .. }
-            | Self::MeshLabelCount { file, .. } => file,
+            | Self::MeshLabelCount { file, .. }
+            | Self::Binary { file, .. } => file,
         }
     }
 
@@ -227,7 +247,8 @@ impl DsgImportError {
         match self {
             Self::InvalidField { node, .. }
             | Self::MissingField { node, .. }
-            | Self::NonFinite { node, .. } => *node,
+            | Self::NonFinite { node, .. }
+            | Self::Binary { node, .. } => *node,
             Self::UnknownNodeType { node, .. }
             | Self::UnknownLayer { node, .. }
             | Self::DuplicateNode { node, .. }
@@ -243,8 +264,17 @@ impl DsgImportError {
         match self {
             Self::InvalidField { field, .. }
             | Self::MissingField { field, .. }
-            | Self::NonFinite { field, .. } => Some(field),
+            | Self::NonFinite { field, .. }
+            | Self::Binary { field, .. } => Some(field),
             Self::MeshConnectionOutOfRange { .. } => Some("attributes.mesh_connections"),
+            _ => None,
+        }
+    }
+
+    /// Byte offset, for errors found while decoding binary data.
+    pub fn byte_offset(&self) -> Option<usize> {
+        match self {
+            Self::Binary { offset, .. } => Some(*offset),
             _ => None,
         }
     }

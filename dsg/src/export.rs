@@ -24,6 +24,13 @@ pub enum DsgExportError {
         #[source]
         source: io::Error,
     },
+    /// A value does not fit the binary format (see
+    /// [`to_binary_bytes`](crate::to_binary_bytes)).
+    #[error("cannot write as Spark-DSG binary: {what}")]
+    Unrepresentable {
+        /// What does not fit.
+        what: String,
+    },
 }
 
 /// Writes `graph` as a Spark-DSG v1.1.3 JSON file at `path` (created or truncated).
@@ -490,7 +497,7 @@ impl<W: Write> Out<W> {
 }
 
 /// The declared layers plus any layer a node uses (sorted, no duplicates).
-fn layer_keys(g: &DsgGraph) -> Vec<LayerKey> {
+pub(crate) fn layer_keys(g: &DsgGraph) -> Vec<LayerKey> {
     let mut keys: Vec<LayerKey> = g.layers.iter().map(|l| l.key).collect();
     keys.extend(g.nodes.iter().map(|n| n.layer));
     keys.sort_unstable();
@@ -501,7 +508,7 @@ fn layer_keys(g: &DsgGraph) -> Vec<LayerKey> {
 /// `layer_names`: every alias of every layer (the first layer claiming a name
 /// wins). A layer without aliases is left out; the importer then gives it its
 /// conventional name again.
-fn layer_names(g: &DsgGraph) -> BTreeMap<&str, LayerKey> {
+pub(crate) fn layer_names(g: &DsgGraph) -> BTreeMap<&str, LayerKey> {
     let mut names = BTreeMap::new();
     for l in &g.layers {
         for a in &l.aliases {
@@ -513,7 +520,7 @@ fn layer_names(g: &DsgGraph) -> BTreeMap<&str, LayerKey> {
 
 /// The `name` attribute: the node's name, or else its label when the importer
 /// could not get the label back from the labelspace.
-fn name_to_write<'g>(g: &'g DsgGraph, n: &'g DsgNode) -> Option<&'g str> {
+pub(crate) fn name_to_write<'g>(g: &'g DsgGraph, n: &'g DsgNode) -> Option<&'g str> {
     if let Some(name) = &n.name {
         return Some(name);
     }
@@ -534,7 +541,7 @@ fn name_to_write<'g>(g: &'g DsgGraph, n: &'g DsgNode) -> Option<&'g str> {
 /// `c - h` and `c + h` gives exactly `lo` and `hi`. Falls back to the rounded exact
 /// midpoint and half width when no nearby pair does (the box may then read back
 /// one ulp off).
-fn box_axis(lo: f32, hi: f32) -> (f32, f32) {
+pub(crate) fn box_axis(lo: f32, hi: f32) -> (f32, f32) {
     let exact = |c: f32, h: f32| {
         (c - h).to_bits() == lo.to_bits() && (c + h).to_bits() == hi.to_bits() && h >= 0.0
     };

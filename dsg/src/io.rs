@@ -1,11 +1,13 @@
-//! Reading Spark-DSG files from disk (plain or gzip-compressed JSON).
+//! Reading Spark-DSG files from disk: JSON or binary, plain or gzip-compressed.
 
+use std::ffi::OsStr;
 use std::fs::File;
 use std::io::Read;
 use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
 
+use super::binary::{is_binary, parse_binary_with_progress};
 use super::error::DsgImportError;
 use super::json::parse_json_with_progress;
 use super::model::DsgGraph;
@@ -13,20 +15,28 @@ use super::progress::{ImportPhase, ImportProgress};
 
 const CHUNK: usize = 4 << 20;
 
-/// Reads a Spark-DSG JSON file, plain (`.json`) or gzip-compressed (`.json.gz`).
+/// Reads a Spark-DSG file: JSON (`.json`) or binary (`.sparkdsg`), plain or
+/// gzip-compressed (`.json.gz`).
 ///
-/// Compression is detected from the gzip magic bytes, not from the extension. The
-/// file name is used in errors and stored as [`DsgGraph::source`].
+/// The format is detected from the content, not from the extension: gzip by its
+/// magic bytes; then a file starting with the binary header (`dd 09000000
+/// "SPARK_DSG"`) is binary, and one starting with `{` (after whitespace) is JSON.
+/// Otherwise the extension decides as in Spark-DSG's `file_io.cpp`: `.sparkdsg` and
+/// no extension mean binary (such a file without header is then rejected as legacy
+/// binary), anything else JSON. The file name is used in errors and stored as
+/// [`DsgGraph::source`].
 ///
 /// # Errors
 /// [`DsgImportError::Io`] if the file cannot be read, [`DsgImportError::Gzip`] for
-/// corrupt compressed data, and every error of [`parse_json`](super::parse_json).
+/// corrupt compressed data, and every error of [`parse_json`](super::parse_json) or
+/// [`parse_binary`](super::parse_binary).
 pub fn read_file(path: impl AsRef<Path>) -> Result<DsgGraph, DsgImportError> {
     read_file_with_progress(path, &mut |_| {})
 }
 
 /// [`read_file`] that reports [`ImportPhase::Read`], [`ImportPhase::Decompress`]
-/// (gzip only), [`ImportPhase::Parse`], [`ImportPhase::Validate`] and
+/// (gzip only), [`ImportPhase::Parse`] (JSON parse or binary decode),
+/// [`ImportPhase::Validate`] and
 /// [`ImportPhase::Done`] to `progress`.
 ///
 /// # Errors
@@ -38,7 +48,26 @@ pub fn read_file_with_progress(
     let path = path.as_ref();
     let name = path.display().to_string();
     let bytes = read_bytes(path, &name, progress)?;
-    parse_json_with_progress(&bytes, &name, progress)
+    if binary_content(&bytes, path) {
+        parse_binary_with_progress(&bytes, &name, progress)
+    } else {
+        parse_json_with_progress(&bytes, &name, progress)
+    }
+}
+
+/// Whether `bytes` (decompressed) of the file at `path` are to be read as binary.
+fn binary_content(bytes: &[u8], path: &Path) -> bool {
+    if is_binary(bytes) {
+        return true;
+    }
+    if bytes.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{') {
+        return false;
+    }
+    let mut ext = path.extension();
+    if ext == Some(OsStr::new("gz")) {
+        ext = path.file_stem().map(Path::new).and_then(Path::extension);
+    }
+    ext.is_none_or(|e| e == "sparkdsg")
 }
 
 /// Reads a file and gunzips it when it starts with the gzip magic bytes.

@@ -59,9 +59,20 @@ pub fn parse_json_with_progress(
         Err(e) => return Err(diag::diagnose(bytes, source_name, &e)),
     };
     progress(ImportProgress::new(ImportPhase::Parse, len, Some(len)));
-    let graph = Builder::new(source_name, progress).build(raw)?;
+    let graph = build_graph(raw, source_name, progress)?;
     progress(ImportProgress::new(ImportPhase::Done, len, Some(len)));
     Ok(graph)
+}
+
+/// Checks a parsed file and converts it to a [`DsgGraph`], reporting
+/// [`ImportPhase::Validate`]: the step the JSON and the binary importers share, so
+/// that both enforce one set of graph invariants.
+pub(crate) fn build_graph(
+    raw: RawFile<'_>,
+    source_name: &str,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<DsgGraph, DsgImportError> {
+    Builder::new(source_name, progress).build(raw)
 }
 
 struct Builder<'p> {

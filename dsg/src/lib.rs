@@ -15,6 +15,11 @@
 //!   `SPARK_DSG_header`, `layer_keys`, partitions, optional mesh) and the legacy
 //!   v1.0 encoding written by older Hydra (no header, `layer_ids`, agent partitions
 //!   from the node-level `timestamp` and the id's prefix). `.json.gz` is handled.
+//! * [`parse_binary`] / [`parse_binary_body`] import Spark-DSG's binary format
+//!   (`.sparkdsg` files, and the header-less `to_binary()` buffers Hydra sends over
+//!   ZMQ), 1.0.2 to 1.1.3, into the same [`DsgGraph`] through the same checks;
+//!   [`write_binary`] / [`to_binary_bytes`] export it. [`read_file`] tells the formats
+//!   apart by content.
 //! * [`office::generate`] builds a uHumans2-like office with the paper's counts, so
 //!   benchmarks need no external file.
 //! * [`DsgGraph::counts`] and [`DsgGraph::claim_stats`] summarise a graph (node and
@@ -46,6 +51,7 @@
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-dsg builds scenes for ygg-store, which supports little-endian targets only");
 
+mod binary;
 mod diag;
 mod error;
 mod export;
@@ -61,6 +67,11 @@ pub mod objects;
 pub mod office;
 pub mod replay;
 
+#[doc(inline)]
+pub use self::binary::{
+    is_binary, parse_binary, parse_binary_body, parse_binary_with_progress, to_binary_body,
+    to_binary_bytes, write_binary,
+};
 #[doc(inline)]
 pub use self::error::DsgImportError;
 #[doc(inline)]

@@ -8,9 +8,10 @@ pub enum ImportPhase {
     /// Decompressing gzip; `done` counts decompressed bytes, `total` is the size the
     /// gzip trailer announces (a hint: it is stored modulo 2^32).
     Decompress,
-    /// Parsing the JSON; reported at its start (`done = 0`) and end
-    /// (`done = total` = JSON bytes). serde_json gives no position while it runs, so a
-    /// CLI should show a spinner for this phase.
+    /// Parsing the JSON or decoding the binary file; reported at its start
+    /// (`done = 0`) and end (`done = total` = bytes). serde_json gives no position
+    /// while it runs, so a CLI should show a spinner for this phase; the binary
+    /// decoder also reports the byte offset after each section (nodes, edges, mesh).
     Parse,
     /// Checking and converting nodes, mesh and edges; `done` / `total` count nodes
     /// plus edges.

@@ -3,7 +3,8 @@
 //! * `inspect scene.ygg` and `inspect --scene NAME` (a live scene): every layer (id,
 //!   name, nodes, points, edges, nested nodes, generation, segment bytes, indexes), the
 //!   layer DAG, totals, the objects of the query contract, the indexes and the memory.
-//! * `inspect FILE.json[.gz]` (a Spark-DSG file): the paper's static table — for each
+//! * `inspect FILE.json[.gz]` or `inspect FILE.sparkdsg` (a Spark-DSG file): the paper's
+//!   static table — for each
 //!   layout (all four, or `--layouts mint,saffron`), layers, nodes, edges and memory.
 
 use std::collections::BTreeMap;
@@ -23,8 +24,8 @@ use crate::query_cli::{live_snapshot, seconds};
 /// Arguments of `ygg-reader inspect`.
 #[derive(Parser, Debug)]
 pub struct InspectArgs {
-    /// A `.ygg` snapshot, or a Spark-DSG JSON file (`.json`, `.json.gz`) whose layouts to
-    /// tabulate.
+    /// A `.ygg` snapshot, or a Spark-DSG file (`.json`, `.json.gz`, `.sparkdsg`) whose
+    /// layouts to tabulate.
     #[arg(required_unless_present = "scene", conflicts_with = "scene")]
     pub path: Option<PathBuf>,
     /// Inspect a live scene published under this name instead of a file.
@@ -51,7 +52,7 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
         (Some(path), _) => {
             if !args.layouts.is_empty() {
                 return Err(format!(
-                    "{}: --layouts applies to Spark-DSG JSON files, not to snapshots",
+                    "{}: --layouts applies to Spark-DSG files, not to snapshots",
                     path.display()
                 ));
             }
@@ -75,7 +76,7 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
         }
         (None, Some(scene)) => {
             if !args.layouts.is_empty() {
-                return Err("--layouts applies to Spark-DSG JSON files".to_owned());
+                return Err("--layouts applies to Spark-DSG files".to_owned());
             }
             let snapshot = live_snapshot(scene, seconds(args.timeout, "--timeout")?)?;
             let raw = snapshot.raw();
@@ -101,7 +102,8 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
     }
 }
 
-/// Whether `path` holds Spark-DSG JSON (plain or gzip) rather than a snapshot.
+/// Whether `path` holds a Spark-DSG file (JSON, plain or gzip, or binary with its
+/// header) rather than a snapshot.
 fn is_spark_dsg(path: &Path) -> Result<bool, String> {
     if path.extension().is_some_and(|e| e == "ygg") {
         return Ok(false);
@@ -112,6 +114,7 @@ fn is_spark_dsg(path: &Path) -> Result<bool, String> {
         .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let head = &head[..n];
     Ok(head.starts_with(&[0x1f, 0x8b])
+        || ygg_dsg::is_binary(head)
         || head
             .iter()
             .find(|b| !b.is_ascii_whitespace())

@@ -1,8 +1,9 @@
-//! `ygg-writer import`: a Spark-DSG JSON file (plain or gzip) to a `.ygg` snapshot in one
-//! of the paper's layouts, with a progress bar.
+//! `ygg-writer import`: a Spark-DSG file (JSON or binary `.sparkdsg`, plain or gzip) to a
+//! `.ygg` snapshot in one of the paper's layouts, with a progress bar.
 //!
 //! Phases: read (file bytes), decompress (gzip only; decompressed bytes), parse (a
-//! spinner: the JSON parser reports no position), validate (nodes and edges), build
+//! spinner: the JSON parser reports no position; the binary decoder is fast enough not
+//! to need one), validate (nodes and edges), build
 //! (the layout), save (archive and write). The snapshot is written to a temporary file
 //! next to the output and renamed into place, so a failed import never leaves a partial
 //! `.ygg` behind. Errors name the file (and, from the importer, the node and field).
@@ -19,7 +20,8 @@ use ygg_store::{SceneGraph, SceneView};
 /// Arguments of `ygg-writer import`.
 #[derive(Parser, Debug)]
 pub struct ImportArgs {
-    /// Spark-DSG JSON file (`.json`, or gzip-compressed `.json.gz`).
+    /// Spark-DSG file: JSON (`.json`, or gzip-compressed `.json.gz`) or binary
+    /// (`.sparkdsg`); the format is detected from the content.
     pub input: PathBuf,
     /// The paper's layout to build: vanilla, chocolate, mint or saffron.
     #[arg(long, default_value = "mint")]
@@ -135,7 +137,7 @@ fn enter_phase(bar: &ProgressBar, p: ImportProgress) {
     match p.phase {
         ImportPhase::Read => bytes("reading"),
         ImportPhase::Decompress => bytes("decompressing"),
-        ImportPhase::Parse => spinner(bar, "parsing JSON".to_owned()),
+        ImportPhase::Parse => spinner(bar, "parsing".to_owned()),
         ImportPhase::Validate => {
             let style =
                 ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} nodes and edges")
