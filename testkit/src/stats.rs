@@ -38,6 +38,12 @@ pub fn median_p99(samples: &[f64]) -> Option<(f64, f64)> {
     Some((nearest_rank(&v, 0.5)?, nearest_rank(&v, 0.99)?))
 }
 
+/// [`median_p99`] of nanosecond samples, in microseconds; `NaN` when there are none (the
+/// form report tables print).
+pub fn median_p99_us(samples_ns: &[f64]) -> (f64, f64) {
+    median_p99(samples_ns).map_or((f64::NAN, f64::NAN), |(m, p)| (m / 1e3, p / 1e3))
+}
+
 /// Median of `samples` (any order) by nearest rank; `None` when there are none.
 pub fn median(samples: &[f64]) -> Option<f64> {
     nearest_rank(&sorted(samples), 0.5)

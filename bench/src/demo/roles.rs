@@ -5,7 +5,7 @@
 //! progress and summary lines.
 
 use std::time::{Duration, Instant};
-use ygg_dsg::layout;
+use ygg_dsg::layout::{self, LayerRole};
 use ygg_dsg::objects::{self, Objects};
 use ygg_reader::{SceneReader, SceneSnapshot};
 use ygg_store::query::{self, ConeView};
@@ -224,7 +224,7 @@ enum Query {
 
 /// The newest agent pose and the one before it (the agents layer's two largest ids).
 fn newest_pose(view: &ArchivedScene<'_>) -> Option<(Point, Point)> {
-    let agents = view.layer_by_name("AGENTS")?;
+    let agents = layout::layer_with_role(view, LayerRole::Agents)?;
     let mut ids: Vec<NodeId> = view.layer_nodes(agents).map(|n| view.node_id(n)).collect();
     ids.sort_unstable();
     let p = |i: NodeId| view.node(i).and_then(|n| view.points(n).first().copied());
@@ -239,7 +239,7 @@ fn newest_pose(view: &ArchivedScene<'_>) -> Option<(Point, Point)> {
 
 /// The room whose exact box holds `p` (x and y), smallest id first.
 fn room_of(view: &ArchivedScene<'_>, p: &Point) -> Option<NodeId> {
-    let rooms = view.layer_by_name("ROOMS")?;
+    let rooms = layout::layer_with_role(view, LayerRole::Rooms)?;
     let mut found: Vec<NodeId> = view
         .layer_nodes(rooms)
         .filter(|&n| {
@@ -253,8 +253,8 @@ fn room_of(view: &ArchivedScene<'_>, p: &Point) -> Option<NodeId> {
 }
 
 fn room_scope(view: &ArchivedScene<'_>, room: NodeId) -> Option<(ygg_store::LayerId, NodeId)> {
-    let mesh = view.layer_by_name(&layout::claimed_mesh_layer_name(room))?;
-    let group = view.layer_by_name(&format!("room:{}", room.0))?;
+    let mesh = layout::layer_with_role(view, LayerRole::ClaimedMesh { room })?;
+    let group = layout::layer_with_role(view, LayerRole::RoomGroups { room })?;
     let claimed = view.layer_nodes(group).map(|n| view.node_id(n)).min()?;
     Some((mesh, claimed))
 }
@@ -398,7 +398,7 @@ fn owners_of_points(
 
 /// The room by recomputing each room's box from its sub-tree's points.
 fn room_of_brute(view: &ArchivedScene<'_>, p: &Point) -> Option<u64> {
-    let rooms = view.layer_by_name("ROOMS")?;
+    let rooms = layout::layer_with_role(view, LayerRole::Rooms)?;
     let mut found: Vec<u64> = Vec::new();
     for r in view.layer_nodes(rooms) {
         let id = view.node_id(r);

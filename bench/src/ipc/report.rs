@@ -55,11 +55,7 @@ impl Row {
     }
 }
 
-/// Median and 99th percentile ([`stats::median_p99`], nearest rank) of nanosecond
-/// samples, in µs; NaN when there are none.
-pub fn median_p99_us(samples_ns: &[f64]) -> (f64, f64) {
-    stats::median_p99(samples_ns).map_or((f64::NAN, f64::NAN), |(m, p)| (m / 1e3, p / 1e3))
-}
+pub use ygg_testkit::stats::median_p99_us;
 
 /// [`stats::median`] of a list (NaN values ignored; NaN when there are none).
 pub fn median(values: &[f64]) -> f64 {

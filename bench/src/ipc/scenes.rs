@@ -32,8 +32,7 @@ pub struct AgentMover {
 impl AgentMover {
     /// The agent poses of `g` (nodes of layer `AGENTS` with one point).
     pub fn new(g: &SceneGraph) -> Res<Self> {
-        let layer = g
-            .layer_by_name("AGENTS")
+        let layer = ygg_dsg::layout::layer_with_role(g, ygg_dsg::layout::LayerRole::Agents)
             .ok_or("the office has no AGENTS layer")?;
         let agents: Vec<(NodeId, Point)> = g
             .layer_nodes(layer)

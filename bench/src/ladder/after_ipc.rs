@@ -16,7 +16,7 @@
 //! clock).
 
 use super::Answer;
-use super::harness::{Row, Target, median_p99};
+use super::harness::{Row, Target};
 use super::report::fmt_us;
 use super::workload::{Query, Workload};
 use super::ygg::YggTarget;
@@ -29,6 +29,7 @@ use std::time::{Duration, Instant};
 use ygg_dsg::DsgGraph;
 use ygg_dsg::layout::Layout;
 use ygg_store::{NodeId, Point, SceneGraph, SceneView};
+use ygg_testkit::stats::median_p99_us;
 
 /// First word of a reader's answer line.
 const TAG: &str = "q1a";
@@ -174,8 +175,8 @@ pub fn after_update_ipc(
         let scene = Scene::new(&format!("ladder-{layout}"));
         let result = measure(&scene, *layout, graph.clone(), w, (room, point), n, gap);
         leftovers.extend(scene.clean_up());
-        let mut s = result?;
-        let (median_us, p99_us) = median_p99(&mut s.total);
+        let s = result?;
+        let (median_us, p99_us) = median_p99_us(&s.total);
         eprintln!(
             "after_update_ipc {layout}: {} / {} µs in {:.1?}",
             fmt_us(median_us),
@@ -190,13 +191,13 @@ pub fn after_update_ipc(
         });
         details.push(format!(
             "{layout} {} + {} ({} of {} layers, {:.0} KB; the call {}) + {}",
-            fmt_us(median_p99(&mut s.mutate).0),
-            fmt_us(median_p99(&mut s.visible).0),
+            fmt_us(median_p99_us(&s.mutate).0),
+            fmt_us(median_p99_us(&s.visible).0),
             s.layers_sent,
             s.layers_total,
             s.bytes_sent as f64 / 1e3,
-            fmt_us(median_p99(&mut s.publish).0),
-            fmt_us(median_p99(&mut s.query).0),
+            fmt_us(median_p99_us(&s.publish).0),
+            fmt_us(median_p99_us(&s.query).0),
         ));
     }
     check_interrupted()?;

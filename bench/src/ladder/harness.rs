@@ -5,6 +5,7 @@ use super::Answer;
 use super::workload::{Query, Workload};
 use std::collections::BTreeMap;
 use std::time::Instant;
+use ygg_testkit::stats::median_p99_us;
 
 /// Something that answers workload queries (a rung of the ladder or an anchor).
 pub trait Target {
@@ -25,16 +26,6 @@ pub struct Row {
     pub median_us: f64,
     /// 99th-percentile latency, microseconds.
     pub p99_us: f64,
-}
-
-/// Median and p99 of samples (nanoseconds in, microseconds out).
-pub fn median_p99(samples: &mut [f64]) -> (f64, f64) {
-    if samples.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    samples.sort_unstable_by(f64::total_cmp);
-    let at = |q: f64| samples[((samples.len() - 1) as f64 * q).round() as usize] / 1e3;
-    (at(0.5), at(0.99))
 }
 
 /// Queries per block of [`time_targets`].
@@ -68,8 +59,8 @@ pub fn time_targets(targets: &[&dyn Target], workload: &Workload, reps: usize) -
         .zip(samples)
         .flat_map(|(target, by_family)| {
             let name = target.name();
-            by_family.into_iter().map(move |(query, mut s)| {
-                let (median_us, p99_us) = median_p99(&mut s);
+            by_family.into_iter().map(move |(query, s)| {
+                let (median_us, p99_us) = median_p99_us(&s);
                 Row {
                     target: name.clone(),
                     query,

@@ -13,7 +13,7 @@ pub type Answer = Vec<u64>;
 
 pub mod ygg;
 
-use harness::{Row, Target, compare_answers, median_p99, time_targets};
+use harness::{Row, Target, compare_answers, time_targets};
 use report::{Report, StaticRow};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,6 +21,7 @@ use workload::Workload;
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::{NodeId, SceneGraph, SceneView};
+use ygg_testkit::stats::median_p99_us;
 
 /// Options of `ygg-bench ladder`.
 #[derive(clap::Args, Debug)]
@@ -253,7 +254,7 @@ fn update_latency(g: &mut SceneGraph, n: usize) -> f64 {
             samples.push(t.elapsed().as_nanos() as f64);
         }
     }
-    median_p99(&mut samples).0
+    median_p99_us(&samples).0
 }
 
 /// Query after an update, in process: translate an object's mesh, then answer a Q1a in
@@ -297,7 +298,7 @@ fn after_update_local(
             std::hint::black_box(target.answer(&q));
             samples.push(t.elapsed().as_nanos() as f64);
         }
-        let (median_us, p99_us) = median_p99(&mut samples);
+        let (median_us, p99_us) = median_p99_us(&samples);
         rows.push(Row {
             target: l.name().into(),
             query: "after_update_local".into(),

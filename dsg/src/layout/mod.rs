@@ -115,12 +115,6 @@ fn prefixed(prefix: u64, index: u64) -> NodeId {
     NodeId(prefix << 56 | index)
 }
 
-/// Name of the layer holding a room's claimed mesh in per-room layouts: the name of
-/// [`LayerRole::ClaimedMesh`].
-pub fn claimed_mesh_layer_name(room: NodeId) -> String {
-    LayerRole::ClaimedMesh { room }.name()
-}
-
 /// The layers holding object geometry in a scene built by [`build`] (those whose
 /// [`LayerRole::holds_object_mesh`]), ascending, with the room each serves (`None` for
 /// vanilla's single mesh layer). Works on any view, so readers of a snapshot find them

@@ -35,15 +35,15 @@ pub struct Objects<'a, V: SceneView> {
     pub(super) object_layers: Vec<LayerId>,
     /// Layers holding object geometry (mesh nodes nested under objects), ascending.
     pub(super) mesh_layers: Vec<LayerId>,
-    /// A box around every point of each mesh layer (same order; `None` when empty).
-    pub(super) layer_boxes: Vec<Option<Aabb>>,
-    /// Objects with at least one mesh node, ascending by id.
-    pub(super) claimants: Vec<Claimant<V::NodeRef<'a>>>,
+    /// A box around every point of each mesh layer (same order; `None` when empty),
+    /// computed by the first query that prunes layers by them.
+    layer_boxes: OnceLock<Vec<Option<Aabb>>>,
+    /// Objects with at least one mesh node, ascending by id, computed by the first query
+    /// that needs them (radius and visibility, not nearest).
+    claimants: OnceLock<Vec<Claimant<V::NodeRef<'a>>>>,
     /// Part boxes of each claimant (same order; empty when not kept), computed by the
     /// first visibility query.
     pub(super) parts: OnceLock<Vec<Vec<Aabb>>>,
-    /// The ids of `claimants`.
-    pub(super) claimant_ids: FxHashSet<NodeId>,
     /// With [`Objects::in_subtree`]: every object node kept (with geometry or not).
     pub(super) kept: Option<FxHashSet<NodeId>>,
 }
@@ -59,9 +59,8 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// of `view`.
     ///
     /// # Complexity
-    /// O(layers + objects + their children) for the object layers, and one pass over
-    /// the mesh layers' nodes for a box around each layer (their boxes where the layout
-    /// keeps them, their points otherwise).
+    /// O(layers). The objects with geometry and the layer boxes are found by the first
+    /// query that needs them ([`Objects::objects_within`], [`Objects::visible_objects`]).
     pub fn new(view: &'a V) -> Self {
         Self::build(view, false, |_| true)
     }
@@ -114,87 +113,120 @@ impl<'a, V: SceneView> Objects<'a, V> {
             .collect();
         object_layers.sort_unstable();
         object_layers.dedup();
-        let mut claimants = Vec::new();
-        // The mesh layers holding the kept objects' mesh nodes.
-        let mut used_layers = Vec::new();
         let mut kept = FxHashSet::default();
-        for &layer in &object_layers {
-            for n in view.layer_nodes(layer).filter(|&n| keep(n)) {
-                if scoped {
-                    kept.insert(view.node_id(n));
-                }
-                // Every mesh child when there are few of them (one per object except in
-                // saffron) or the object keeps no box; else the first, to know it has one.
-                let children = view.children(n);
-                let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
-                let mut mesh: Vec<V::NodeRef<'a>> = Vec::new();
-                let mut only_mesh = true;
-                for &c in children {
-                    let Some(c) = view.node(c) else {
-                        only_mesh = false;
-                        continue;
-                    };
-                    let l = view.node_layer(c);
-                    if mesh_layers.binary_search(&l).is_err() {
-                        only_mesh = false;
-                        continue;
-                    }
-                    if all || mesh.is_empty() {
-                        mesh.push(c);
-                    }
-                    if used_layers.last() != Some(&l) {
-                        used_layers.push(l);
-                    }
-                    only_mesh &= view.children(c).is_empty();
-                }
-                if mesh.is_empty() {
-                    continue;
-                }
-                let indexed_mesh = only_mesh
-                    && view.aabb(n).is_some()
-                    && view.node_index(view.node_id(n)).is_some();
-                // The object's own box (mint, saffron) holds its whole sub-tree; else the
-                // box around its mesh nodes' points.
-                let bbox = view.aabb(n).or_else(|| {
-                    mesh.iter()
-                        .filter_map(|&m| Aabb::from_points(view.points(m)))
-                        .reduce(|a, b| a.union(&b))
-                });
-                claimants.push(Claimant {
-                    id: view.node_id(n),
-                    bbox,
-                    mesh: if all { mesh } else { Vec::new() },
-                    indexed_mesh,
-                });
-            }
-        }
         if scoped {
-            // Only the layers holding the kept objects' geometry.
+            // The mesh layers holding the kept objects' geometry: an object's mesh nodes
+            // lie in one layer in every layout, so its first mesh child names it.
+            let mut used_layers = Vec::new();
+            for &layer in &object_layers {
+                for n in view.layer_nodes(layer).filter(|&n| keep(n)) {
+                    kept.insert(view.node_id(n));
+                    let first_mesh = view.children(n).iter().find_map(|&c| {
+                        let l = view.node_layer(view.node(c)?);
+                        mesh_layers.binary_search(&l).is_ok().then_some(l)
+                    });
+                    used_layers.extend(first_mesh);
+                }
+            }
             used_layers.sort_unstable();
             used_layers.dedup();
             mesh_layers = used_layers;
         }
-        claimants.sort_unstable_by_key(|c| c.id);
-        claimants.dedup_by_key(|c| c.id);
-        let claimant_ids = claimants.iter().map(|c| c.id).collect();
-        let layer_boxes = mesh_layers
-            .iter()
-            .map(|&l| {
-                view.layer_nodes(l)
-                    .filter_map(|n| view.aabb(n).or_else(|| Aabb::from_points(view.points(n))))
-                    .reduce(|a, b| a.union(&b))
-            })
-            .collect();
         Objects {
             view,
             object_layers,
             mesh_layers,
-            layer_boxes,
-            claimants,
+            layer_boxes: OnceLock::new(),
+            claimants: OnceLock::new(),
             parts: OnceLock::new(),
-            claimant_ids,
             kept: scoped.then_some(kept),
         }
+    }
+
+    /// The objects (among those kept) with at least one mesh node, ascending by id.
+    ///
+    /// # Complexity
+    /// The first call visits every kept object's children: O(objects + their mesh
+    /// nodes); later calls are free.
+    pub(super) fn claimants(&self) -> &[Claimant<V::NodeRef<'a>>] {
+        self.claimants.get_or_init(|| {
+            let view = self.view;
+            let mut claimants = Vec::new();
+            for &layer in &self.object_layers {
+                for n in view.layer_nodes(layer) {
+                    if !self.is_kept(view.node_id(n)) {
+                        continue;
+                    }
+                    // Every mesh child when there are few of them (one per object except
+                    // in saffron) or the object keeps no box; else the first, to know it
+                    // has one.
+                    let children = view.children(n);
+                    let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
+                    let mut mesh: Vec<V::NodeRef<'a>> = Vec::new();
+                    let mut only_mesh = true;
+                    for &c in children {
+                        let Some(c) = view.node(c) else {
+                            only_mesh = false;
+                            continue;
+                        };
+                        if self.mesh_layers.binary_search(&view.node_layer(c)).is_err() {
+                            only_mesh = false;
+                            continue;
+                        }
+                        if all || mesh.is_empty() {
+                            mesh.push(c);
+                        }
+                        only_mesh &= view.children(c).is_empty();
+                    }
+                    if mesh.is_empty() {
+                        continue;
+                    }
+                    let indexed_mesh = only_mesh
+                        && view.aabb(n).is_some()
+                        && view.node_index(view.node_id(n)).is_some();
+                    // The object's own box (mint, saffron) holds its whole sub-tree; else
+                    // the box around its mesh nodes' points.
+                    let bbox = view.aabb(n).or_else(|| {
+                        mesh.iter()
+                            .filter_map(|&m| Aabb::from_points(view.points(m)))
+                            .reduce(|a, b| a.union(&b))
+                    });
+                    claimants.push(Claimant {
+                        id: view.node_id(n),
+                        bbox,
+                        mesh: if all { mesh } else { Vec::new() },
+                        indexed_mesh,
+                    });
+                }
+            }
+            claimants.sort_unstable_by_key(|c| c.id);
+            claimants.dedup_by_key(|c| c.id);
+            claimants
+        })
+    }
+
+    /// A box around every point of each mesh layer (in [`Objects::mesh_layers`] order;
+    /// `None` for an empty layer).
+    ///
+    /// # Complexity
+    /// The first call visits every node of the mesh layers (their boxes where the layout
+    /// keeps them, their points otherwise); later calls are free.
+    pub(super) fn layer_boxes(&self) -> &[Option<Aabb>] {
+        self.layer_boxes.get_or_init(|| {
+            self.mesh_layers
+                .iter()
+                .map(|&l| {
+                    self.view
+                        .layer_nodes(l)
+                        .filter_map(|n| {
+                            self.view
+                                .aabb(n)
+                                .or_else(|| Aabb::from_points(self.view.points(n)))
+                        })
+                        .reduce(|a, b| a.union(&b))
+                })
+                .collect()
+        })
     }
 
     /// The view queried.
@@ -232,14 +264,20 @@ impl<'a, V: SceneView> Objects<'a, V> {
 
     /// The objects that claim at least one mesh vertex, ascending.
     pub fn objects_with_geometry(&self) -> impl Iterator<Item = NodeId> + '_ {
-        self.claimants.iter().map(|c| c.id)
+        self.claimants().iter().map(|c| c.id)
     }
 
-    /// The object owning mesh node `mesh` (its parent, when that is an object with
-    /// geometry).
+    /// The object owning mesh node `mesh`: its parent, when that is a kept object node
+    /// (which then has geometry: `mesh`).
     pub(super) fn owner(&self, mesh: NodeId) -> Option<NodeId> {
-        let parent = self.view.parent(self.view.node(mesh)?)?;
-        self.claimant_ids.contains(&parent).then_some(parent)
+        let parent = self.view.node(self.view.parent(self.view.node(mesh)?)?)?;
+        let id = self.view.node_id(parent);
+        (self
+            .object_layers
+            .binary_search(&self.view.node_layer(parent))
+            .is_ok()
+            && self.is_kept(id))
+        .then_some(id)
     }
 
     /// Every object node carrying `label`, ascending (O(1) for a label no node has).

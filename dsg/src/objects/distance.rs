@@ -13,66 +13,57 @@ impl<V: SceneView> Objects<'_, V> {
     /// [`SpatialQueryError::NonFinitePoint`] (as [`ObjectQueryError::Spatial`]).
     ///
     /// # Complexity
-    /// One [`ygg_store::query::nearest_nodes`] (`m = 1`) per object-mesh layer (a kd-tree
-    /// search where the layer has an index; repeated with a larger `m` only while mesh
-    /// nodes without an object come first), then one [`ygg_store::query::nodes_within_radius`]
-    /// at the best distance on the layer(s) holding it, to resolve exact ties.
+    /// One [`ygg_store::query::nearest_nodes`] (`m = 1`) per object-mesh layer whose box
+    /// can hold a closer vertex (a kd-tree search where the layer has an index; repeated
+    /// with a larger `m` only while mesh nodes without an object come first).
     pub fn nearest_object(&self, point: Point) -> Result<Option<NodeId>, ObjectQueryError> {
         check_point(&point)?;
-        // The closest claimed mesh node of each layer, nearest layer boxes first; a layer
+        // Layers to search, nearest layer boxes first (one layer needs no boxes); a layer
         // whose box is farther than the best distance so far cannot hold a closer node
         // (nor a tie).
-        let mut order: Vec<(f64, LayerId)> = self
-            .mesh_layers
-            .iter()
-            .zip(&self.layer_boxes)
-            .filter_map(|(&l, b)| Some((lower_bound(b.as_ref()?, &point), l)))
-            .collect();
-        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let mut best_d: Option<f32> = None;
-        let mut closest: Vec<(LayerId, f32)> = Vec::with_capacity(order.len());
+        let order: Vec<(f64, LayerId)> = match self.mesh_layers.as_slice() {
+            [] => return Ok(None),
+            &[only] => vec![(0.0, only)],
+            layers => {
+                let mut order: Vec<(f64, LayerId)> = layers
+                    .iter()
+                    .zip(self.layer_boxes())
+                    .filter_map(|(&l, b)| Some((lower_bound(b.as_ref()?, &point), l)))
+                    .collect();
+                order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                order
+            }
+        };
+        // The best (distance, owner) so far. Within a layer the store's nearest query
+        // breaks distance ties by the smaller mesh node id, and the layouts number mesh
+        // nodes in the order of their objects' ids, so the first owned node found is
+        // the tie winner of its layer; across layers the smaller (distance, owner) wins.
+        let mut best: Option<(f32, NodeId)> = None;
         for (bound, layer) in order {
-            if best_d.is_some_and(|b| bound > f64::from(b)) {
+            if best.is_some_and(|(d, _)| bound > f64::from(d)) {
                 break;
             }
             let mut m = 1usize;
             let found = loop {
                 let found = query::nearest_nodes(self.view, Scope::Layer(layer), point, m)?;
-                let first = found.iter().find(|&&(mesh, _)| self.owner(mesh).is_some());
+                let first = found
+                    .iter()
+                    .find_map(|&(mesh, d)| Some((d, self.owner(mesh)?)));
                 match first {
-                    Some(&(_, d)) => break Some(d),
+                    Some(hit) => break Some(hit),
                     // Only mesh nodes without an object so far (vanilla's unclaimed
                     // vertices): look further.
                     None if found.len() == m => m = m.saturating_mul(4),
                     None => break None,
                 }
             };
-            if let Some(d) = found {
-                closest.push((layer, d));
-                if best_d.is_none_or(|b| d < b) {
-                    best_d = Some(d);
-                }
+            if let Some((d, owner)) = found
+                && best.is_none_or(|b| (d, owner) < b)
+            {
+                best = Some((d, owner));
             }
         }
-        let Some(d0) = best_d else {
-            return Ok(None);
-        };
-        // Every mesh node at exactly that distance ties (none is closer): the radius
-        // query with radius d0 finds exactly them, and their smallest owner wins.
-        let mut winner: Option<NodeId> = None;
-        for &(layer, d) in &closest {
-            if d != d0 {
-                continue;
-            }
-            for mesh in query::nodes_within_radius(self.view, Scope::Layer(layer), point, d0)? {
-                if let Some(owner) = self.owner(mesh)
-                    && winner.is_none_or(|w| owner < w)
-                {
-                    winner = Some(owner);
-                }
-            }
-        }
-        Ok(winner)
+        Ok(best.map(|(_, owner)| owner))
     }
 
     /// Every object with a vertex at distance `<= radius` from `point`, ascending.
@@ -98,9 +89,10 @@ impl<V: SceneView> Objects<'_, V> {
             return Err(SpatialQueryError::InvalidRadius(radius).into());
         }
         let mut out = Vec::new();
-        if !self.claimants.is_empty() && self.claimants.iter().all(|c| c.indexed_mesh) {
+        let claimants = self.claimants();
+        if !claimants.is_empty() && claimants.iter().all(|c| c.indexed_mesh) {
             let r2 = query::radius_bound(radius);
-            for c in &self.claimants {
+            for c in claimants {
                 let Some(b) = c.bbox else { continue };
                 // The box bounds the object's vertices: entirely beyond the ball, or
                 // entirely inside it (and it holds at least one vertex).
@@ -120,7 +112,7 @@ impl<V: SceneView> Objects<'_, V> {
             }
             return Ok(out);
         }
-        for (&layer, b) in self.mesh_layers.iter().zip(&self.layer_boxes) {
+        for (&layer, b) in self.mesh_layers.iter().zip(self.layer_boxes()) {
             if b.is_none_or(|b| lower_bound(&b, &point) > f64::from(radius)) {
                 continue;
             }

@@ -35,8 +35,9 @@ impl<V: SceneView> Objects<'_, V> {
     ) -> Result<Vec<NodeId>, ObjectQueryError> {
         let cone = cone_view(eye, dir, half_angle_deg, range)?;
         let checked = cone.checked()?;
+        let claimants = self.claimants();
         let parts = self.parts.get_or_init(|| {
-            self.claimants
+            claimants
                 .iter()
                 .map(|c| match (&c.bbox, c.mesh.is_empty()) {
                     (Some(around), false) => {
@@ -49,7 +50,7 @@ impl<V: SceneView> Objects<'_, V> {
                 .collect()
         });
         let mut out = Vec::new();
-        for (c, parts) in self.claimants.iter().zip(parts) {
+        for (c, parts) in claimants.iter().zip(parts) {
             match c.bbox.map(|b| checked.classify(&b)) {
                 Some(BoxSight::Outside) => continue,
                 // The box holds the object's claimed vertices, and lies inside the cone.
