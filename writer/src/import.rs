@@ -95,7 +95,7 @@ pub fn run(args: &ImportArgs) -> Result<(), String> {
 
     let t = Instant::now();
     spinner(&bar, format!("saving {}", args.output.display()));
-    let bytes = save_atomically(&graph, &args.output).inspect_err(|_| bar.finish_and_clear())?;
+    let bytes = save(&graph, &args.output).inspect_err(|_| bar.finish_and_clear())?;
     timings.save = t.elapsed();
     bar.finish_and_clear();
 
@@ -160,31 +160,15 @@ fn spinner(bar: &ProgressBar, msg: String) {
     bar.enable_steady_tick(Duration::from_millis(100));
 }
 
-/// Writes the snapshot to a temporary file beside `out` and renames it into place.
-/// Returns the file size.
-fn save_atomically(graph: &SceneGraph, out: &Path) -> Result<u64, String> {
-    let name = out
-        .file_name()
-        .ok_or_else(|| format!("{}: not a file name", out.display()))?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = out.with_file_name(tmp_name);
-    let result = graph
-        .save(&tmp)
-        .map_err(|e| format!("{}: cannot write: {e}", out.display()))
-        .and_then(|()| {
-            std::fs::rename(&tmp, out).map_err(|e| format!("{}: cannot write: {e}", out.display()))
-        })
-        .and_then(|()| {
-            std::fs::metadata(out)
-                .map(|m| m.len())
-                .map_err(|e| format!("{}: {e}", out.display()))
-        });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+/// Writes the snapshot to `out` ([`SceneGraph::save`]: crash-safe, the old file stays
+/// intact on failure). Returns the file size.
+fn save(graph: &SceneGraph, out: &Path) -> Result<u64, String> {
+    graph
+        .save(out)
+        .map_err(|e| format!("cannot write the snapshot: {e}"))?;
+    std::fs::metadata(out)
+        .map(|m| m.len())
+        .map_err(|e| format!("{}: {e}", out.display()))
 }
 
 /// Counts of a built graph for the summary line.

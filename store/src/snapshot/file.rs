@@ -148,8 +148,9 @@ impl SnapshotFile {
             return Err(SnapshotError::BadMagic(what));
         }
         // SAFETY: the map is read-only and private to this process. Snapshot files are
-        // written once and never modified in place (`save` writes a whole new file); a
-        // concurrent truncation by another process is outside this contract (as for any
+        // written once and never modified in place: `save` writes a new file and renames
+        // it over the old one, so this mapping keeps the old inode's bytes. A process that
+        // truncates or rewrites the file in place is outside this contract (as for any
         // mmap-based reader) and documented on `SnapshotFile`.
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(io)?;
         Self::from_backing(Backing::Mapped(map), &what)
@@ -234,13 +235,18 @@ impl SceneGraph {
             .expect("a freshly archived graph validates")
     }
 
-    /// Writes the graph to a `.ygg` snapshot file.
+    /// Writes the graph to a `.ygg` snapshot file, crash-safely: the bytes go to a new
+    /// temporary file in the same folder, which is synced, renamed over `path` and the
+    /// folder synced. A reader that maps the old file keeps its (unchanged) bytes; a
+    /// crash, a full disk or any other failure leaves the old file as it was and removes
+    /// the temporary one.
     ///
     /// # Errors
-    /// [`SnapshotError::Io`] when the file cannot be written.
+    /// [`SnapshotError::Io`] naming `path` when the file cannot be written (a full disk
+    /// says "No space left on device"); the previous file is intact.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), SnapshotError> {
         let path = path.as_ref();
-        std::fs::write(path, self.to_file_bytes()).map_err(|source| SnapshotError::Io {
+        replace_file(path, &self.to_file_bytes()).map_err(|source| SnapshotError::Io {
             path: path.display().to_string(),
             source,
         })
@@ -253,4 +259,29 @@ impl SceneGraph {
         segments.extend(layers.iter().map(|l| l.as_slice()));
         pack_file(&segments)
     }
+}
+
+/// Replaces the file at `path` with `bytes` atomically: a temporary file in the same
+/// folder (so that the rename stays within one file system), written and synced, renamed
+/// over `path`, then the folder synced so that the rename survives a crash.
+fn replace_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().map_or_else(
+        || std::ffi::OsString::from("snapshot"),
+        std::ffi::OsStr::to_os_string,
+    );
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    let mut tmp = tempfile::Builder::new()
+        .prefix(&prefix)
+        .suffix(".tmp")
+        .tempfile_in(dir)?;
+    tmp.write_all(bytes)?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    std::fs::File::open(dir)?.sync_all()
 }
