@@ -125,10 +125,9 @@ fn a_save_that_runs_out_of_room_fails_clearly_and_keeps_the_old_file() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../dsg/tests/fixtures/office_tiny.json");
     // A file-size limit of 64 KiB (128 blocks of 512 bytes), with SIGXFSZ ignored so that
     // the write fails with EFBIG instead of killing the writer.
-    let script =
-        format!("trap '' XFSZ; ulimit -f 128; exec \"$0\" import \"$1\" --layout mint -o \"$2\"");
+    let script = "trap '' XFSZ; ulimit -f 128; exec \"$0\" import \"$1\" --layout mint -o \"$2\"";
     let output = Command::new("sh")
-        .args(["-c", &script])
+        .args(["-c", script])
         .arg(binary("ygg-writer"))
         .arg(&input)
         .arg(&out)
