@@ -100,6 +100,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     office.mesh = None;
     write("dsg_json", "office.json", &ygg_dsg::to_json_bytes(&office))?;
+    write("dsg_binary", "office.sparkdsg", &ygg_dsg::to_binary_bytes(&office)?)?;
+    write("dsg_binary", "office.body", &ygg_dsg::to_binary_body(&office)?)?;
 
     for (name, line) in [
         ("nearest", r#"{"op":"nearest_object","point":[5,5,1]}"#),
