@@ -3,6 +3,8 @@
 mod inspect;
 mod query_cli;
 
+use query_cli::seconds;
+
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -104,11 +106,6 @@ fn error_chain(e: &dyn std::error::Error) -> String {
         source = s.source();
     }
     text
-}
-
-fn seconds(value: f64, flag: &str) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(value)
-        .map_err(|_| format!("{flag} must be a non-negative number of seconds"))
 }
 
 /// Opens the reader, waiting up to `wait` for the scene to exist.

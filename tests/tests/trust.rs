@@ -27,6 +27,16 @@ fn office() -> SceneGraph {
     .expect("office")
 }
 
+/// A writer serving the small office in `scene`, its first snapshot published.
+fn publish_office(scene: &TestScene) -> SceneWriter {
+    let mut writer = SceneWriter::builder(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .create(office())
+        .expect("writer");
+    writer.publish().expect("publish");
+    writer
+}
+
 fn reader(scene: &TestScene, copy: bool) -> SceneReader {
     SceneReader::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)
@@ -75,11 +85,7 @@ fn answers(snapshot: &SceneSnapshot) -> String {
 fn copy_mode_answers_like_zero_copy_and_copies_only_changed_layers() {
     let scene = TestScene::new("copy");
     let _watchdog = Watchdog::new(Duration::from_secs(120));
-    let mut writer = SceneWriter::builder(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create(office())
-        .expect("writer");
-    writer.publish().expect("publish");
+    let mut writer = publish_office(&scene);
     let mut shared = reader(&scene, false);
     let mut copied = reader(&scene, true);
     let a = snapshot_at(&mut shared, 1);
@@ -121,11 +127,7 @@ fn copy_mode_answers_like_zero_copy_and_copies_only_changed_layers() {
 fn copy_mode_is_not_reached_by_rewrites_of_the_shared_segments() {
     let scene = TestScene::new("rewrite");
     let _watchdog = Watchdog::new(Duration::from_secs(120));
-    let mut writer = SceneWriter::builder(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create(office())
-        .expect("writer");
-    writer.publish().expect("publish");
+    let writer = publish_office(&scene);
     let mut copied = reader(&scene, true);
     let snapshot = snapshot_at(&mut copied, 1);
     let before = answers(&snapshot);
