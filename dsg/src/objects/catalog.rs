@@ -62,7 +62,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// O(layers). The objects with geometry and the layer boxes are found by the first
     /// query that needs them ([`Objects::objects_within`], [`Objects::visible_objects`]).
     pub fn new(view: &'a V) -> Self {
-        Self::build(view, false, |_| true)
+        Self::build(view, None, |_| true)
     }
 
     /// Like [`Objects::new`], restricted to the objects in the sub-tree of `root` (a
@@ -80,7 +80,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// assert!(here.iter().all(|o| everywhere.contains(o)));
     /// ```
     pub fn in_subtree(view: &'a V, root: NodeId) -> Self {
-        Self::build(view, true, |n| {
+        Self::build(view, Some(root), |n| {
             let mut cur = view.parent(n);
             while let Some(p) = cur {
                 if p == root {
@@ -92,10 +92,20 @@ impl<'a, V: SceneView> Objects<'a, V> {
         })
     }
 
-    /// [`Objects::new`] over the object nodes `keep` accepts; `scoped`: keep only the
-    /// mesh layers holding their geometry.
-    fn build(view: &'a V, scoped: bool, keep: impl Fn(V::NodeRef<'a>) -> bool) -> Self {
-        let roles: Vec<(LayerId, LayerRole)> = layer_roles(view).collect();
+    /// [`Objects::new`] over the object nodes `keep` accepts; with a `root`, only the
+    /// layers below the root's layer in the layer DAG (nesting follows DAG edges, so no
+    /// other layer holds a node of its sub-tree), and only the mesh layers holding the
+    /// kept objects' geometry.
+    fn build(view: &'a V, root: Option<NodeId>, keep: impl Fn(V::NodeRef<'a>) -> bool) -> Self {
+        let scoped = root.is_some();
+        let below: Option<Vec<LayerId>> = root.map(|r| layers_below(view, r));
+        let roles: Vec<(LayerId, LayerRole)> = match &below {
+            None => layer_roles(view).collect(),
+            Some(below) => below
+                .iter()
+                .filter_map(|&l| Some((l, LayerRole::of_name(view.layer_name(l)?)?)))
+                .collect(),
+        };
         let mut mesh_layers: Vec<LayerId> = roles
             .iter()
             .filter(|(_, role)| role.holds_object_mesh())
@@ -110,6 +120,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
             .filter(|(_, role)| role.holds_objects())
             .map(|&(l, _)| l)
             .chain(mesh_layers.iter().flat_map(|&m| view.layer_parents(m)))
+            .filter(|l| below.as_ref().is_none_or(|b| b.binary_search(l).is_ok()))
             .collect();
         object_layers.sort_unstable();
         object_layers.dedup();
@@ -306,4 +317,24 @@ impl<'a, V: SceneView> Objects<'a, V> {
                 .is_ok()
         })
     }
+}
+
+/// The layer of `root` and every layer below it in the layer DAG, ascending (empty when
+/// `root` does not exist).
+fn layers_below<V: SceneView>(view: &V, root: NodeId) -> Vec<LayerId> {
+    let Some(start) = view.node(root).map(|n| view.node_layer(n)) else {
+        return Vec::new();
+    };
+    let mut seen = vec![start];
+    let mut next = vec![start];
+    while let Some(l) = next.pop() {
+        for c in view.layer_children(l) {
+            if !seen.contains(&c) {
+                seen.push(c);
+                next.push(c);
+            }
+        }
+    }
+    seen.sort_unstable();
+    seen
 }
