@@ -127,7 +127,11 @@ impl<V: SceneView> Target for YggTarget<'_, V> {
                 None => return Vec::new(),
             },
         };
-        let found = objects.answer(&q.to_object_query()).unwrap_or_default();
+        let found = match q {
+            // The same call `answer` makes, without building an owned query per call.
+            Query::Label { label } => objects.objects_with_label(label),
+            _ => objects.answer(&q.to_object_query()).unwrap_or_default(),
+        };
         found.into_iter().map(|n| n.0).collect()
     }
 }
