@@ -293,19 +293,20 @@ impl<'a, V: SceneView> Objects<'a, V> {
 
     /// Every object node carrying `label`, ascending (O(1) for a label no node has).
     pub fn objects_with_label(&self, label: &str) -> Vec<NodeId> {
-        let mut out: Vec<NodeId> = self
-            .view
-            .layers_with_label(label)
-            .filter(|l| self.object_layers.binary_search(l).is_ok())
-            .flat_map(|l| {
+        let mut out: Vec<NodeId> = Vec::new();
+        for l in self.view.layers_with_label(label) {
+            if self.object_layers.binary_search(&l).is_err() {
+                continue;
+            }
+            out.extend(
                 self.view
                     .nodes_with_label(l, label)
                     .map(|n| self.view.node_id(n))
-            })
-            .filter(|id| self.is_kept(*id))
-            .collect();
+                    .filter(|id| self.is_kept(*id)),
+            );
+        }
+        // A node lives in one layer: the answers need sorting, not de-duplicating.
         out.sort_unstable();
-        out.dedup();
         out
     }
 
