@@ -11,8 +11,8 @@ use super::model::{
     NodeKind,
 };
 use super::progress::{ImportPhase, ImportProgress};
-use super::report::{DropClass, ImportOptions, ImportReport, Imported};
 use super::raw::{Num, RawBox, RawFile, RawMesh, RawNode};
+use super::report::{DropClass, ImportOptions, ImportReport, Imported};
 use super::symbol::{NodeSymbol, describe_id, looks_like_symbol};
 
 /// Parses a Spark-DSG JSON document (v1.1.x or legacy v1.0) into a [`DsgGraph`].

@@ -147,7 +147,11 @@ impl ImportReport {
 
     /// Records the fault `e` when `lenient` and a lenient import tolerates it;
     /// otherwise returns it.
-    pub(crate) fn tolerate(&mut self, lenient: bool, e: DsgImportError) -> Result<(), DsgImportError> {
+    pub(crate) fn tolerate(
+        &mut self,
+        lenient: bool,
+        e: DsgImportError,
+    ) -> Result<(), DsgImportError> {
         match DropClass::of(&e) {
             Some(class) if lenient => {
                 self.record(class, || {

@@ -234,11 +234,19 @@ fn check_rooms(d: &DsgGraph, truth: &Truth, queries: &[ObjectQuery]) {
             cur = n.parent;
         }
         let p = object.position;
-        let xy = |r: &ygg_dsg::DsgNode| (r.position[0] - p[0]).powi(2) + (r.position[1] - p[1]).powi(2);
+        let xy =
+            |r: &ygg_dsg::DsgNode| (r.position[0] - p[0]).powi(2) + (r.position[1] - p[1]).powi(2);
         room_nodes
             .iter()
-            .find(|r| r.bbox.is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a])))
-            .or_else(|| room_nodes.iter().min_by(|a, b| xy(a).total_cmp(&xy(b)).then(a.id.cmp(&b.id))))
+            .find(|r| {
+                r.bbox
+                    .is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a]))
+            })
+            .or_else(|| {
+                room_nodes
+                    .iter()
+                    .min_by(|a, b| xy(a).total_cmp(&xy(b)).then(a.id.cmp(&b.id)))
+            })
             .map(|r| r.id)
     };
     let rooms: Vec<u64> = room_nodes.iter().map(|n| n.id).collect();
@@ -317,7 +325,11 @@ fn apartment_objects_are_located_by_position() {
             // From exactly an object's position, that object is the nearest.
             for (id, pts) in &truth.objects {
                 assert_eq!(o.nearest_object(pts[0]).unwrap(), Some(NodeId(*id)));
-                assert!(o.objects_within(pts[0], 0.0).unwrap().contains(&NodeId(*id)));
+                assert!(
+                    o.objects_within(pts[0], 0.0)
+                        .unwrap()
+                        .contains(&NodeId(*id))
+                );
             }
             // Integer labels only (no labelspace; names are symbols): 5 x3, 11 x2, 16 x2.
             for (label, n) in [("5", 3), ("11", 2), ("16", 2), ("O(0)", 0), ("4", 0)] {

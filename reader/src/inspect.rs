@@ -378,7 +378,8 @@ fn print_labels(d: &ygg_dsg::DsgGraph) {
     for l in labels {
         println!(
             "{:>10}  {:<20} {:>7}",
-            l.semantic_label.map_or_else(|| "-".to_owned(), |s| s.to_string()),
+            l.semantic_label
+                .map_or_else(|| "-".to_owned(), |s| s.to_string()),
             l.name.as_deref().unwrap_or("-"),
             thousands(l.objects)
         );

@@ -336,7 +336,10 @@ fn inspect_lists_object_labels() {
             .map(|l| l.split_whitespace().map(str::to_owned).collect())
             .collect()
     };
-    assert!(out.contains("object labels: 3 distinct over 7 objects"), "{out}");
+    assert!(
+        out.contains("object labels: 3 distinct over 7 objects"),
+        "{out}"
+    );
     assert_eq!(
         rows(&out),
         [["5", "-", "3"], ["11", "-", "2"], ["16", "-", "2"]],
@@ -347,7 +350,12 @@ fn inspect_lists_object_labels() {
     let rows = rows(&out);
     assert_eq!(rows.len(), 27, "{out}");
     assert_eq!(rows[0][1..], ["light", "4"], "{out}");
-    assert_eq!(rows.iter().map(|r| r[2].parse::<usize>().unwrap()).sum::<usize>(), 34);
+    assert_eq!(
+        rows.iter()
+            .map(|r| r[2].parse::<usize>().unwrap())
+            .sum::<usize>(),
+        34
+    );
 }
 
 #[test]

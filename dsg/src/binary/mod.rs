@@ -131,7 +131,14 @@ pub(crate) fn parse_binary_impl(
         .into_import(source_name));
     };
     let body = bytes.get(header.len..).unwrap_or_default();
-    parse(body, header.len, header.version, source_name, options, progress)
+    parse(
+        body,
+        header.len,
+        header.version,
+        source_name,
+        options,
+        progress,
+    )
 }
 
 /// Parses a header-less body, as spark_dsg's `to_binary()` writes it (ZMQ messages,
@@ -156,7 +163,15 @@ pub fn parse_binary_body(
     version: DsgVersion,
     source_name: &str,
 ) -> Result<DsgGraph, DsgImportError> {
-    parse(bytes, 0, version, source_name, ImportOptions::STRICT, &mut |_| {}).map(|i| i.graph)
+    parse(
+        bytes,
+        0,
+        version,
+        source_name,
+        ImportOptions::STRICT,
+        &mut |_| {},
+    )
+    .map(|i| i.graph)
 }
 
 fn parse(
