@@ -493,7 +493,7 @@ impl DsgGraph {
                 objects,
             })
             .collect();
-        out.sort_by(|a, b| b.objects.cmp(&a.objects));
+        out.sort_by_key(|l| std::cmp::Reverse(l.objects));
         out
     }
 
