@@ -1,6 +1,7 @@
 //! `ygg-bench`: the Yggdrasil demo and benchmarks.
 
 mod demo;
+mod dsg_io;
 mod ipc;
 mod ladder;
 
@@ -28,6 +29,8 @@ enum Command {
     Ladder(ladder::LadderArgs),
     /// Multi-process publish-to-visible latency: shared memory vs a Unix socket.
     Ipc(ipc::IpcArgs),
+    /// Importing the full office (JSON and binary) against spark_dsg's own load.
+    DsgIo(dsg_io::DsgIoArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -37,6 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
+        Command::DsgIo(args) => dsg_io::run(&args),
     }
 }
 

@@ -1,6 +1,7 @@
 //! Errors of the Spark-DSG importer.
 
 use super::model::{DsgVersion, LayerKey};
+use super::report::LENIENT_HINT;
 use super::symbol::describe_id;
 
 /// Why a Spark-DSG file could not be imported.
@@ -10,7 +11,8 @@ use super::symbol::describe_id;
 /// `attributes.position[1]` or `mesh.points[12]`. Errors found while parsing carry
 /// the JSON line and column (binary files: the byte offset); errors found by the
 /// checks after parsing (dangling edges, duplicates, ranges) name the list index
-/// instead.
+/// instead. The faults a lenient import drops ([`crate::DropClass`]) say so in their
+/// message.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum DsgImportError {
@@ -79,7 +81,7 @@ pub enum DsgImportError {
         version: DsgVersion,
     },
     /// `attributes.type` is not one of the supported node attribute types.
-    #[error("{file}: {}unknown node attribute type `{type_name}`", at_node(&Some(*.node)))]
+    #[error("{file}: {}unknown node attribute type `{type_name}`{}", at_node(&Some(*.node)), LENIENT_HINT)]
     UnknownNodeType {
         /// File name.
         file: String,
@@ -90,7 +92,7 @@ pub enum DsgImportError {
     },
     /// A node's layer (or layer and partition) is not declared in the header fields
     /// `layer_keys` / `layer_ids`.
-    #[error("{file}: {}unknown {layer}", at_node(&Some(*.node)))]
+    #[error("{file}: {}unknown {layer} (not declared in the file){}", at_node(&Some(*.node)), LENIENT_HINT)]
     UnknownLayer {
         /// File name.
         file: String,
@@ -100,7 +102,7 @@ pub enum DsgImportError {
         layer: LayerKey,
     },
     /// Two nodes share an id.
-    #[error("{file}: {}duplicate node id (nodes[{first}] and nodes[{second}])", at_node(&Some(*.node)))]
+    #[error("{file}: {}duplicate node id (nodes[{first}] and nodes[{second}]){}", at_node(&Some(*.node)), LENIENT_HINT)]
     DuplicateNode {
         /// File name.
         file: String,
@@ -112,7 +114,7 @@ pub enum DsgImportError {
         second: usize,
     },
     /// An edge names a node that does not exist.
-    #[error("{file}: edges[{edge}] {} -> {}: node {} does not exist", describe_id(*.from), describe_id(*.to), describe_id(*.missing))]
+    #[error("{file}: edges[{edge}] {} -> {}: node {} does not exist{}", describe_id(*.from), describe_id(*.to), describe_id(*.missing), LENIENT_HINT)]
     DanglingEdge {
         /// File name.
         file: String,
@@ -126,7 +128,7 @@ pub enum DsgImportError {
         missing: u64,
     },
     /// An edge joins a node to itself.
-    #[error("{file}: edges[{edge}]: {}self edge", at_node(&Some(*.node)))]
+    #[error("{file}: edges[{edge}]: {}self edge{}", at_node(&Some(*.node)), LENIENT_HINT)]
     SelfEdge {
         /// File name.
         file: String,
@@ -136,7 +138,7 @@ pub enum DsgImportError {
         node: u64,
     },
     /// The same unordered node pair appears in two edges.
-    #[error("{file}: edges[{edge}] {} -> {}: duplicate edge", describe_id(*.from), describe_id(*.to))]
+    #[error("{file}: edges[{edge}] {} -> {}: duplicate edge{}", describe_id(*.from), describe_id(*.to), LENIENT_HINT)]
     DuplicateEdge {
         /// File name.
         file: String,
@@ -161,7 +163,7 @@ pub enum DsgImportError {
         value: f32,
     },
     /// An object's `mesh_connections` entry is not a vertex of the mesh.
-    #[error("{file}: {}attributes.mesh_connections[{index}] = {vertex} but the mesh has {vertex_count} vertices", at_node(&Some(*.node)))]
+    #[error("{file}: {}attributes.mesh_connections[{index}] = {vertex} but the mesh has {vertex_count} vertices{}", at_node(&Some(*.node)), LENIENT_HINT)]
     MeshConnectionOutOfRange {
         /// File name.
         file: String,

@@ -7,11 +7,12 @@ use std::path::Path;
 
 use flate2::read::MultiGzDecoder;
 
-use super::binary::{is_binary, parse_binary_with_progress};
+use super::binary::{is_binary, parse_binary_impl};
 use super::error::DsgImportError;
-use super::json::parse_json_with_progress;
+use super::json::parse_json_impl;
 use super::model::DsgGraph;
 use super::progress::{ImportPhase, ImportProgress};
+use super::report::{ImportOptions, Imported};
 
 const CHUNK: usize = 4 << 20;
 
@@ -45,13 +46,40 @@ pub fn read_file_with_progress(
     path: impl AsRef<Path>,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Result<DsgGraph, DsgImportError> {
+    import_file(path, ImportOptions::STRICT, progress).map(|i| i.graph)
+}
+
+/// [`read_file`] with [`ImportOptions`]: a lenient import drops what cannot be imported
+/// (edges to absent nodes, duplicate edges, nodes of undeclared layers or unknown
+/// types, ...: every [`DropClass`](crate::DropClass)) and lists it in
+/// [`Imported::report`], for JSON and binary files alike.
+///
+/// # Errors
+/// As [`read_file`], less the faults a lenient import drops.
+pub fn read_file_with(
+    path: impl AsRef<Path>,
+    options: ImportOptions,
+) -> Result<Imported, DsgImportError> {
+    import_file(path, options, &mut |_| {})
+}
+
+/// The general file import: [`read_file_with`] that reports its phases to `progress`
+/// as [`read_file_with_progress`] does.
+///
+/// # Errors
+/// As [`read_file_with`].
+pub fn import_file(
+    path: impl AsRef<Path>,
+    options: ImportOptions,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<Imported, DsgImportError> {
     let path = path.as_ref();
     let name = path.display().to_string();
     let bytes = read_bytes(path, &name, progress)?;
     if binary_content(&bytes, path) {
-        parse_binary_with_progress(&bytes, &name, progress)
+        parse_binary_impl(&bytes, &name, options, progress)
     } else {
-        parse_json_with_progress(&bytes, &name, progress)
+        parse_json_impl(&bytes, &name, options, progress)
     }
 }
 

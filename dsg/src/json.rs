@@ -12,7 +12,8 @@ use super::model::{
 };
 use super::progress::{ImportPhase, ImportProgress};
 use super::raw::{Num, RawBox, RawFile, RawMesh, RawNode};
-use super::symbol::{NodeSymbol, looks_like_symbol};
+use super::report::{DropClass, ImportOptions, ImportReport, Imported};
+use super::symbol::{NodeSymbol, describe_id, looks_like_symbol};
 
 /// Parses a Spark-DSG JSON document (v1.1.x or legacy v1.0) into a [`DsgGraph`].
 ///
@@ -42,6 +43,34 @@ pub fn parse_json(bytes: &[u8], source_name: &str) -> Result<DsgGraph, DsgImport
     parse_json_with_progress(bytes, source_name, &mut |_| {})
 }
 
+/// [`parse_json`] with [`ImportOptions`]: with `lenient`, the faults of every
+/// [`DropClass`] are dropped and listed in [`Imported::report`] instead of failing
+/// (JSON nodes of unknown attribute types are skipped whole).
+///
+/// # Errors
+/// As [`parse_json`], less the faults a lenient import drops.
+///
+/// # Examples
+/// ```
+/// use ygg_dsg::{DropClass, ImportOptions};
+/// let json = br#"{"layer_ids":[2],
+///   "nodes":[{"id":1,"layer":2,"attributes":{"type":"ObjectNodeAttributes","position":[0,0,0]}}],
+///   "edges":[{"source":1,"target":2}]}"#;
+/// let strict = ygg_dsg::parse_json(json, "dangling.json").unwrap_err();
+/// assert!(strict.to_string().contains("--lenient"));
+/// let lenient = ygg_dsg::parse_json_with(json, "dangling.json", ImportOptions::LENIENT)?;
+/// assert_eq!(lenient.graph.nodes.len(), 1);
+/// assert_eq!(lenient.report.count(DropClass::EdgeToAbsentNode), 1);
+/// # Ok::<(), ygg_dsg::DsgImportError>(())
+/// ```
+pub fn parse_json_with(
+    bytes: &[u8],
+    source_name: &str,
+    options: ImportOptions,
+) -> Result<Imported, DsgImportError> {
+    parse_json_impl(bytes, source_name, options, &mut |_| {})
+}
+
 /// [`parse_json`] that reports its phases ([`ImportPhase::Parse`], then
 /// [`ImportPhase::Validate`], then [`ImportPhase::Done`]) to `progress`.
 ///
@@ -52,6 +81,16 @@ pub fn parse_json_with_progress(
     source_name: &str,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Result<DsgGraph, DsgImportError> {
+    parse_json_impl(bytes, source_name, ImportOptions::STRICT, progress).map(|i| i.graph)
+}
+
+/// The general JSON import: options and progress.
+pub(crate) fn parse_json_impl(
+    bytes: &[u8],
+    source_name: &str,
+    options: ImportOptions,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<Imported, DsgImportError> {
     let len = bytes.len() as u64;
     progress(ImportProgress::new(ImportPhase::Parse, 0, Some(len)));
     let raw: RawFile<'_> = match serde_json::from_slice(bytes) {
@@ -59,9 +98,9 @@ pub fn parse_json_with_progress(
         Err(e) => return Err(diag::diagnose(bytes, source_name, &e)),
     };
     progress(ImportProgress::new(ImportPhase::Parse, len, Some(len)));
-    let graph = build_graph(raw, source_name, progress)?;
+    let imported = build_graph(raw, source_name, options, progress)?;
     progress(ImportProgress::new(ImportPhase::Done, len, Some(len)));
-    Ok(graph)
+    Ok(imported)
 }
 
 /// Checks a parsed file and converts it to a [`DsgGraph`], reporting
@@ -70,13 +109,16 @@ pub fn parse_json_with_progress(
 pub(crate) fn build_graph(
     raw: RawFile<'_>,
     source_name: &str,
+    options: ImportOptions,
     progress: &mut dyn FnMut(ImportProgress),
-) -> Result<DsgGraph, DsgImportError> {
-    Builder::new(source_name, progress).build(raw)
+) -> Result<Imported, DsgImportError> {
+    Builder::new(source_name, options, progress).build(raw)
 }
 
 struct Builder<'p> {
     file: String,
+    lenient: bool,
+    report: ImportReport,
     progress: &'p mut dyn FnMut(ImportProgress),
 }
 
@@ -98,14 +140,25 @@ impl Declared {
 }
 
 impl<'p> Builder<'p> {
-    fn new(file: &str, progress: &'p mut dyn FnMut(ImportProgress)) -> Self {
+    fn new(
+        file: &str,
+        options: ImportOptions,
+        progress: &'p mut dyn FnMut(ImportProgress),
+    ) -> Self {
         Self {
             file: file.to_owned(),
+            lenient: options.lenient,
+            report: ImportReport::default(),
             progress,
         }
     }
 
-    fn build(self, raw: RawFile<'_>) -> Result<DsgGraph, DsgImportError> {
+    /// Drops the fault `e` (recording it) when lenient and tolerable; else returns it.
+    fn tolerate(&mut self, e: DsgImportError) -> Result<(), DsgImportError> {
+        self.report.tolerate(self.lenient, e)
+    }
+
+    fn build(mut self, raw: RawFile<'_>) -> Result<Imported, DsgImportError> {
         let version = match &raw.header {
             Some(h) => DsgVersion::new(h.version.major, h.version.minor, h.version.patch),
             None => DsgVersion::LEGACY,
@@ -154,20 +207,36 @@ impl<'p> Builder<'p> {
         index.reserve(raw_nodes.len());
         let mut nodes = Vec::with_capacity(raw_nodes.len());
         let mut used_keys = BTreeSet::new();
+        // Ids of the nodes a lenient import dropped (unknown type or layer).
+        let mut dropped_nodes: FxHashSet<u64> = FxHashSet::default();
+        // Position in the file's `nodes` of each kept node.
+        let mut file_position: Vec<usize> = Vec::with_capacity(raw_nodes.len());
         for (i, rn) in raw_nodes.into_iter().enumerate() {
-            let node = self.node(rn, legacy, &declared, &labelspaces)?;
+            let id = rn.id;
+            let node = match self.node(rn, legacy, &declared, &labelspaces) {
+                Ok(node) => node,
+                Err(e) => {
+                    self.tolerate(e)?;
+                    dropped_nodes.insert(id);
+                    continue;
+                }
+            };
             if let Some(&first) = index.get(&node.id) {
-                return Err(DsgImportError::DuplicateNode {
-                    file: self.file,
+                self.tolerate(DsgImportError::DuplicateNode {
+                    file: self.file.clone(),
                     node: node.id,
-                    first,
+                    first: file_position[first],
                     second: i,
-                });
+                })?;
+                continue;
             }
-            index.insert(node.id, i);
+            index.insert(node.id, nodes.len());
+            file_position.push(i);
             used_keys.insert(node.layer);
             nodes.push(node);
         }
+        // A dropped id that another node uses is not absent.
+        dropped_nodes.retain(|id| !index.contains_key(id));
 
         // ---- mesh
         let mesh = match raw.mesh {
@@ -176,21 +245,25 @@ impl<'p> Builder<'p> {
         };
         if let Some(m) = &mesh {
             let nv = m.points.len();
-            for n in &nodes {
-                if let Some((k, &v)) = n
-                    .mesh_connections
-                    .iter()
-                    .enumerate()
-                    .find(|&(_, &v)| v as usize >= nv)
-                {
-                    return Err(DsgImportError::MeshConnectionOutOfRange {
-                        file: self.file,
-                        node: n.id,
-                        index: k,
-                        vertex: v,
-                        vertex_count: nv,
-                    });
+            for n in &mut nodes {
+                if n.mesh_connections.iter().all(|&v| (v as usize) < nv) {
+                    continue;
                 }
+                for (k, &v) in n.mesh_connections.iter().enumerate() {
+                    if v as usize >= nv {
+                        self.report.tolerate(
+                            self.lenient,
+                            DsgImportError::MeshConnectionOutOfRange {
+                                file: self.file.clone(),
+                                node: n.id,
+                                index: k,
+                                vertex: v,
+                                vertex_count: nv,
+                            },
+                        )?;
+                    }
+                }
+                n.mesh_connections.retain(|&v| (v as usize) < nv);
             }
         }
 
@@ -203,29 +276,44 @@ impl<'p> Builder<'p> {
         for (e, re) in raw_edges.iter().enumerate() {
             let (s, t) = (re.source, re.target);
             if s == t {
-                return Err(DsgImportError::SelfEdge {
-                    file: self.file,
+                self.tolerate(DsgImportError::SelfEdge {
+                    file: self.file.clone(),
                     edge: e,
                     node: s,
-                });
+                })?;
+                continue;
             }
             let (Some(&si), Some(&ti)) = (index.get(&s), index.get(&t)) else {
                 let missing = if index.contains_key(&s) { t } else { s };
-                return Err(DsgImportError::DanglingEdge {
-                    file: self.file,
-                    edge: e,
-                    from: s,
-                    to: t,
-                    missing,
-                });
+                if dropped_nodes.contains(&missing) {
+                    let file = &self.file;
+                    self.report.record(DropClass::EdgeToDroppedNode, || {
+                        format!(
+                            "{file}: edges[{e}] {} -> {}: node {} was dropped",
+                            describe_id(s),
+                            describe_id(t),
+                            describe_id(missing)
+                        )
+                    });
+                } else {
+                    self.tolerate(DsgImportError::DanglingEdge {
+                        file: self.file.clone(),
+                        edge: e,
+                        from: s,
+                        to: t,
+                        missing,
+                    })?;
+                }
+                continue;
             };
             if !seen.insert((s.min(t), s.max(t))) {
-                return Err(DsgImportError::DuplicateEdge {
-                    file: self.file,
+                self.tolerate(DsgImportError::DuplicateEdge {
+                    file: self.file.clone(),
                     edge: e,
                     from: s,
                     to: t,
-                });
+                })?;
+                continue;
             }
             let (sk, tk) = (nodes[si].layer, nodes[ti].layer);
             if sk == tk {
@@ -276,16 +364,19 @@ impl<'p> Builder<'p> {
         (self.progress)(ImportProgress::new(ImportPhase::Validate, work, Some(work)));
 
         let layers = self.layers(&declared, &used_keys, raw.layer_names.as_ref(), legacy);
-        Ok(DsgGraph {
-            source: self.file,
-            version,
-            layers,
-            nodes,
-            edges,
-            sibling_edges,
-            extra_parent_edges,
-            mesh,
-            labelspaces,
+        Ok(Imported {
+            graph: DsgGraph {
+                source: self.file,
+                version,
+                layers,
+                nodes,
+                edges,
+                sibling_edges,
+                extra_parent_edges,
+                mesh,
+                labelspaces,
+            },
+            report: self.report,
         })
     }
 

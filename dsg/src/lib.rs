@@ -47,6 +47,15 @@
 //! # Invariants
 //! See [`DsgGraph`]. The importer checks them all and returns a [`DsgImportError`]
 //! naming the file, node and field otherwise; it never panics on any input.
+//!
+//! # Strict and lenient import
+//! Import is strict by default: the first fault is an error. Real Hydra output written
+//! by older versions holds faults Spark-DSG itself refuses (an edge to an absent node,
+//! say). [`ImportOptions::LENIENT`] ([`read_file_with`], [`import_file`],
+//! [`parse_json_with`], [`parse_binary_with`]; `ygg-writer import --lenient`) imports
+//! what can be imported: it drops the items of every [`DropClass`] and returns an
+//! [`ImportReport`] with each class dropped, its count and its first example, so
+//! nothing is lost silently. The resulting [`DsgGraph`] keeps every invariant.
 
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-dsg builds scenes for ygg-store, which supports little-endian targets only");
@@ -60,6 +69,7 @@ mod json;
 mod model;
 mod progress;
 mod raw;
+mod report;
 mod symbol;
 
 pub mod layout;
@@ -69,23 +79,25 @@ pub mod replay;
 
 #[doc(inline)]
 pub use self::binary::{
-    is_binary, parse_binary, parse_binary_body, parse_binary_with_progress, to_binary_body,
-    to_binary_bytes, write_binary,
+    is_binary, parse_binary, parse_binary_body, parse_binary_with, parse_binary_with_progress,
+    to_binary_body, to_binary_bytes, write_binary,
 };
 #[doc(inline)]
 pub use self::error::DsgImportError;
 #[doc(inline)]
 pub use self::export::{DsgExportError, to_json_bytes, write_json, write_json_to};
 #[doc(inline)]
-pub use self::io::{read_file, read_file_with_progress};
+pub use self::io::{import_file, read_file, read_file_with, read_file_with_progress};
 #[doc(inline)]
-pub use self::json::{parse_json, parse_json_with_progress};
+pub use self::json::{parse_json, parse_json_with, parse_json_with_progress};
 #[doc(inline)]
 pub use self::model::{
     ClaimStats, DsgAabb, DsgCounts, DsgEdge, DsgGraph, DsgLayer, DsgMesh, DsgNode, DsgParentEdge,
-    DsgVersion, LayerKey, NodeKind,
+    DsgVersion, LabelCount, LayerKey, NodeKind,
 };
 #[doc(inline)]
 pub use self::progress::{ImportPhase, ImportProgress};
+#[doc(inline)]
+pub use self::report::{DropClass, DroppedItems, ImportOptions, ImportReport, Imported};
 #[doc(inline)]
 pub use self::symbol::NodeSymbol;

@@ -195,6 +195,28 @@ pub struct DsgNode {
 }
 
 impl DsgNode {
+    /// The labels a scene built from this node carries: [`DsgNode::label`] (its
+    /// labelspace name, or its `name`) when there is one, and the decimal
+    /// [`DsgNode::semantic_label`] (`"5"`) when there is one, in that order, without
+    /// repeats.
+    ///
+    /// # Examples
+    /// ```
+    /// # let json = br#"{"layer_ids":[{"layer":2}],"nodes":[{"id":5692549928996306944,"layer":2,
+    /// #   "attributes":{"type":"ObjectNodeAttributes","position":[0,0,0],"name":"O(0)","semantic_label":5}}],"edges":[]}"#;
+    /// let g = ygg_dsg::parse_json(json, "hydra.json")?;
+    /// // Hydra names objects after their symbol, which is no label; the id always is one.
+    /// assert_eq!(g.nodes[0].labels().collect::<Vec<_>>(), ["5"]);
+    /// # Ok::<(), ygg_dsg::DsgImportError>(())
+    /// ```
+    pub fn labels(&self) -> impl Iterator<Item = String> + '_ {
+        let id = self
+            .semantic_label
+            .map(|l| l.to_string())
+            .filter(|l| self.label.as_deref() != Some(l.as_str()));
+        self.label.iter().cloned().chain(id)
+    }
+
     /// The id as a Spark-DSG node symbol (`O(3)`, `a(0)`, ...).
     pub fn symbol(&self) -> NodeSymbol {
         NodeSymbol::from_id(self.id)
@@ -349,6 +371,18 @@ impl DsgCounts {
     }
 }
 
+/// One object label of a graph and how many objects carry it
+/// ([`DsgGraph::object_labels`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LabelCount {
+    /// The label id (`semantic_label`), if the objects have one.
+    pub semantic_label: Option<u32>,
+    /// The label name ([`DsgNode::label`]), if any.
+    pub name: Option<String>,
+    /// Objects with this label id and name.
+    pub objects: usize,
+}
+
 /// How objects claim mesh vertices, and whether their stored boxes hold their claims.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ClaimStats {
@@ -430,6 +464,37 @@ impl DsgGraph {
             *h.entry(key).or_default() += 1;
         }
         h
+    }
+
+    /// The object labels with their counts: one entry per distinct pair of
+    /// [`DsgNode::semantic_label`] and [`DsgNode::label`] among the objects, most
+    /// frequent first, ties by label id then name. An object is found by
+    /// `objects_with_label` under each of [`DsgNode::labels`].
+    ///
+    /// # Examples
+    /// ```
+    /// let office = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams { seed: 7, scale: 1.0 });
+    /// let labels = office.object_labels();
+    /// assert_eq!(labels[0].name.as_deref(), Some("light"));
+    /// assert_eq!(labels[0].objects, 40);
+    /// ```
+    pub fn object_labels(&self) -> Vec<LabelCount> {
+        let mut counts: BTreeMap<(Option<u32>, Option<&str>), usize> = BTreeMap::new();
+        for n in self.nodes_of_kind(NodeKind::Object) {
+            *counts
+                .entry((n.semantic_label, n.label.as_deref()))
+                .or_default() += 1;
+        }
+        let mut out: Vec<LabelCount> = counts
+            .into_iter()
+            .map(|((semantic_label, name), objects)| LabelCount {
+                semantic_label,
+                name: name.map(str::to_owned),
+                objects,
+            })
+            .collect();
+        out.sort_by_key(|l| std::cmp::Reverse(l.objects));
+        out
     }
 
     /// Claim statistics of the mesh, or `None` without a mesh. Each object counts a

@@ -3,9 +3,10 @@
 //! * `inspect scene.ygg` and `inspect --scene NAME` (a live scene): every layer (id,
 //!   name, nodes, points, edges, nested nodes, generation, segment bytes, indexes), the
 //!   layer DAG, totals, the objects of the query contract, the indexes and the memory.
-//! * `inspect FILE.json[.gz]` or `inspect FILE.sparkdsg` (a Spark-DSG file): the paper's
-//!   static table — for each
-//!   layout (all four, or `--layouts mint,saffron`), layers, nodes, edges and memory.
+//! * `inspect FILE.json[.gz]` or `inspect FILE.sparkdsg` (a Spark-DSG file): the object
+//!   labels with their counts (label id, name, objects), then the paper's static table —
+//!   for each layout (all four, or `--layouts mint,saffron`), layers, nodes, edges and
+//!   memory.
 
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -364,6 +365,27 @@ fn print_scene<V: SceneView>(
 }
 
 /// The paper's static table: each layout of a Spark-DSG file.
+/// The object labels of a Spark-DSG graph with their counts.
+fn print_labels(d: &ygg_dsg::DsgGraph) {
+    let labels = d.object_labels();
+    println!();
+    println!(
+        "object labels: {} distinct over {} objects (objects_with_label finds an object under its name and under its label id)",
+        labels.len(),
+        thousands(d.counts().kind(ygg_dsg::NodeKind::Object))
+    );
+    println!("{:>10}  {:<20} {:>7}", "label id", "name", "objects");
+    for l in labels {
+        println!(
+            "{:>10}  {:<20} {:>7}",
+            l.semantic_label
+                .map_or_else(|| "-".to_owned(), |s| s.to_string()),
+            l.name.as_deref().unwrap_or("-"),
+            thousands(l.objects)
+        );
+    }
+}
+
 fn layouts_table(path: &Path, layouts: &[Layout]) -> Result<(), String> {
     let layouts = if layouts.is_empty() {
         Layout::ALL.to_vec()
@@ -384,6 +406,7 @@ fn layouts_table(path: &Path, layouts: &[Layout]) -> Result<(), String> {
         thousands(c.mesh_faces),
         imported.as_secs_f64()
     );
+    print_labels(&d);
     println!();
     println!(
         "{:<10} {:>7} {:>10} {:>10} {:>8} {:>8} {:>10} {:>9} {:>11} {:>8}",

@@ -321,6 +321,43 @@ fn malformed_lines_are_answered_with_errors_and_the_rest_still_answered() {
     assert_eq!(text(&o.stdout).lines().collect::<Vec<_>>(), out);
 }
 
+/// `inspect FILE` lists the object labels with their counts: integer labels only in real
+/// Hydra output (no labelspace), label ids and names in the office.
+#[test]
+fn inspect_lists_object_labels() {
+    let o = run("ygg-reader", &[&"inspect", &fixture("apartment_dsg.json")]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    let rows = |out: &str| -> Vec<Vec<String>> {
+        out.lines()
+            .skip_while(|l| !l.starts_with("object labels:"))
+            .skip(2)
+            .take_while(|l| !l.trim().is_empty())
+            .map(|l| l.split_whitespace().map(str::to_owned).collect())
+            .collect()
+    };
+    assert!(
+        out.contains("object labels: 3 distinct over 7 objects"),
+        "{out}"
+    );
+    assert_eq!(
+        rows(&out),
+        [["5", "-", "3"], ["11", "-", "2"], ["16", "-", "2"]],
+        "{out}"
+    );
+    let o = run("ygg-reader", &[&"inspect", &fixture("office_tiny.json")]);
+    let out = text(&o.stdout);
+    let rows = rows(&out);
+    assert_eq!(rows.len(), 27, "{out}");
+    assert_eq!(rows[0][1..], ["light", "4"], "{out}");
+    assert_eq!(
+        rows.iter()
+            .map(|r| r[2].parse::<usize>().unwrap())
+            .sum::<usize>(),
+        34
+    );
+}
+
 #[test]
 fn inspect_shows_layers_dag_indexes_and_memory() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -7,6 +7,11 @@
 //! (the layout), save (archive and write). The snapshot is written to a temporary file
 //! next to the output and renamed into place, so a failed import never leaves a partial
 //! `.ygg` behind. Errors name the file (and, from the importer, the node and field).
+//!
+//! Import is strict: a fault such as an edge to an absent node is an error that says
+//! so and names `--lenient`. With `--lenient` the importer drops what it cannot import
+//! and prints one `lenient import: dropped N <class> (first: ...)` line per class
+//! ([`ygg_dsg::ImportReport`]), or `lenient import: nothing dropped`.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -14,7 +19,7 @@ use std::time::{Duration, Instant};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ygg_dsg::layout::{self, Layout};
-use ygg_dsg::{ImportPhase, ImportProgress};
+use ygg_dsg::{ImportOptions, ImportPhase, ImportProgress};
 use ygg_store::{SceneGraph, SceneView};
 
 /// Arguments of `ygg-writer import`.
@@ -32,6 +37,13 @@ pub struct ImportArgs {
     /// No progress bar (it is also hidden when stderr is not a terminal).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Import what can be imported: drop edges to absent nodes, duplicate and self
+    /// edges, nodes of undeclared layers or unknown attribute types (JSON; binary files
+    /// cannot skip an attribute layout spark_dsg does not register), repeated node ids
+    /// and claims of absent mesh vertices, and print each class dropped with its count
+    /// and first example. Without it, the first such fault is an error.
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 /// Per-phase durations of one import.
@@ -57,7 +69,10 @@ pub fn run(args: &ImportArgs) -> Result<(), String> {
     let mut timings = Timings::default();
     let mut phase_start = Instant::now();
     let mut phase = None;
-    let dsg = ygg_dsg::read_file_with_progress(&args.input, &mut |p: ImportProgress| {
+    let options = ImportOptions {
+        lenient: args.lenient,
+    };
+    let imported = ygg_dsg::import_file(&args.input, options, &mut |p: ImportProgress| {
         if phase != Some(p.phase) {
             let now = Instant::now();
             if phase == Some(ImportPhase::Decompress) || phase == Some(ImportPhase::Read) {
@@ -82,6 +97,7 @@ pub fn run(args: &ImportArgs) -> Result<(), String> {
         e.to_string()
     })?;
     timings.parse += phase_start.elapsed();
+    let ygg_dsg::Imported { graph: dsg, report } = imported;
 
     let t = Instant::now();
     spinner(&bar, format!("building the {} layout", args.layout));
@@ -119,6 +135,11 @@ pub fn run(args: &ImportArgs) -> Result<(), String> {
         timings.build.as_secs_f64(),
         timings.save.as_secs_f64(),
     );
+    if args.lenient {
+        for line in report.to_string().lines() {
+            println!("lenient import: {line}");
+        }
+    }
     Ok(())
 }
 

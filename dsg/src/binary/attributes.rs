@@ -111,7 +111,8 @@ impl<T: Copy> TypeTable<T> {
                 "attributes.type",
                 format!(
                     "{kind} attribute type `{}` (index {idx}) is not a spark_dsg 1.1.3 type; \
-                     blocks have no length prefix, so the rest cannot be read",
+                     blocks have no length prefix, so the rest cannot be read, not even by a \
+                     lenient import",
                     self.names[usize::from(idx)]
                 ),
             )),

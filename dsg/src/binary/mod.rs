@@ -40,6 +40,7 @@ use crate::error::DsgImportError;
 use crate::json::build_graph;
 use crate::model::{DsgGraph, DsgVersion};
 use crate::progress::{ImportPhase, ImportProgress};
+use crate::report::{ImportOptions, Imported};
 
 /// Whether `head` starts with a Spark-DSG binary file header
 /// (`dd 09000000 "SPARK_DSG"`, or `db` for the tag).
@@ -91,6 +92,34 @@ pub fn parse_binary_with_progress(
     source_name: &str,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Result<DsgGraph, DsgImportError> {
+    parse_binary_impl(bytes, source_name, ImportOptions::STRICT, progress).map(|i| i.graph)
+}
+
+/// [`parse_binary`] with [`ImportOptions`]: with `lenient`, the faults of every
+/// [`DropClass`](crate::DropClass) are dropped and listed in [`Imported::report`]
+/// instead of failing. Nodes of spark_dsg layouts the model does not hold
+/// (`KhronosObjectAttributes`, `TraversabilityNodeAttributes`, plain
+/// `NodeAttributes`) are decoded and dropped; an attribute type name spark_dsg 1.1.3
+/// does not register stays an error even then: binary attribute blocks have no length
+/// prefix, so there is no way past one.
+///
+/// # Errors
+/// As [`parse_binary`], less the faults a lenient import drops.
+pub fn parse_binary_with(
+    bytes: &[u8],
+    source_name: &str,
+    options: ImportOptions,
+) -> Result<Imported, DsgImportError> {
+    parse_binary_impl(bytes, source_name, options, &mut |_| {})
+}
+
+/// The general binary file import: options and progress.
+pub(crate) fn parse_binary_impl(
+    bytes: &[u8],
+    source_name: &str,
+    options: ImportOptions,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Result<Imported, DsgImportError> {
     let err = |e: DecodeError| e.into_import(source_name);
     let Some(header) = graph::read_header(bytes).map_err(err)? else {
         return Err(DecodeError::new(
@@ -102,7 +131,14 @@ pub fn parse_binary_with_progress(
         .into_import(source_name));
     };
     let body = bytes.get(header.len..).unwrap_or_default();
-    parse(body, header.len, header.version, source_name, progress)
+    parse(
+        body,
+        header.len,
+        header.version,
+        source_name,
+        options,
+        progress,
+    )
 }
 
 /// Parses a header-less body, as spark_dsg's `to_binary()` writes it (ZMQ messages,
@@ -127,7 +163,15 @@ pub fn parse_binary_body(
     version: DsgVersion,
     source_name: &str,
 ) -> Result<DsgGraph, DsgImportError> {
-    parse(bytes, 0, version, source_name, &mut |_| {})
+    parse(
+        bytes,
+        0,
+        version,
+        source_name,
+        ImportOptions::STRICT,
+        &mut |_| {},
+    )
+    .map(|i| i.graph)
 }
 
 fn parse(
@@ -135,8 +179,9 @@ fn parse(
     base: usize,
     version: DsgVersion,
     source_name: &str,
+    options: ImportOptions,
     progress: &mut dyn FnMut(ImportProgress),
-) -> Result<DsgGraph, DsgImportError> {
+) -> Result<Imported, DsgImportError> {
     if version.major != 1 {
         return Err(DsgImportError::UnsupportedVersion {
             file: source_name.to_owned(),
@@ -158,9 +203,9 @@ fn parse(
     progress(ImportProgress::new(ImportPhase::Parse, 0, Some(len)));
     let raw =
         graph::read_body(body, base, version, progress).map_err(|e| e.into_import(source_name))?;
-    let graph = build_graph(raw, source_name, progress)?;
+    let imported = build_graph(raw, source_name, options, progress)?;
     progress(ImportProgress::new(ImportPhase::Done, len, Some(len)));
-    Ok(graph)
+    Ok(imported)
 }
 
 impl DecodeError {

@@ -8,10 +8,18 @@
 //! | [`Layout::Mint`] | chocolate with exact boxes on objects, a node index on each object and a layer index on each room's claimed-mesh layer |
 //! | [`Layout::Saffron`] | mint with one node per mesh point (a vertex claimed by several objects gets one node per claimant) |
 //!
-//! In every layout an object keeps its Spark-DSG id, carries its label, and nests the
-//! node(s) holding the vertices it claims; object geometry is those vertices. Mesh
-//! node ids are ordered like their objects' ids, so "ties go to the smaller node id"
-//! on mesh nodes means "ties go to the smaller object id".
+//! In every layout an object keeps its Spark-DSG id, carries its labels
+//! ([`crate::DsgNode::labels`]), and nests the node(s) holding the vertices it claims;
+//! object geometry is those vertices. An object that claims no vertex present in the
+//! file (no mesh saved, as in real Hydra output, or empty `mesh_connections`) nests one
+//! node of the same kind holding its `attributes.position` instead, so it is located by
+//! its position. Every other node's geometry is its position. Mesh node ids are ordered
+//! like their objects' ids, so "ties go to the smaller node id" on mesh nodes means
+//! "ties go to the smaller object id".
+//!
+//! Features: objects keep `position_x/y/z`; every node keeps `name`, `semantic_label`
+//! and `timestamp_ns` when the file gives them, and its stored Spark-DSG bounding box as
+//! the six [`STORED_BOX_FEATURES`].
 //!
 //! [`LayerRole`] says what each layer of a built scene holds: it writes the layer names
 //! above ([`LayerRole::name`]) and reads them back ([`LayerRole::of_name`],
@@ -110,6 +118,18 @@ const UNCLAIMED_GROUP: u64 = 0xF1;
 const ROOM_GROUP: u64 = 0xF2;
 const CLAIMED_POINT: u64 = 0xF3;
 const UNCLAIMED_POINT: u64 = 0xF4;
+
+/// The features holding a node's stored Spark-DSG `bounding_box` ([`crate::DsgNode::bbox`]):
+/// min x, y, z, then max x, y, z. The store's own box of a node (rooms; objects in mint
+/// and saffron) is exact and computed from geometry, so it is not the stored one.
+pub const STORED_BOX_FEATURES: [&str; 6] = [
+    "bbox_min_x",
+    "bbox_min_y",
+    "bbox_min_z",
+    "bbox_max_x",
+    "bbox_max_y",
+    "bbox_max_z",
+];
 
 fn prefixed(prefix: u64, index: u64) -> NodeId {
     NodeId(prefix << 56 | index)
@@ -264,9 +284,15 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             let r = b.g.set_geometry(id, vec![n.position]);
             b.edit(r)?;
         }
-        if let Some(label) = &n.label {
-            let r = b.g.add_label(id, label);
+        for label in n.labels() {
+            let r = b.g.add_label(id, &label);
             b.edit(r)?;
+        }
+        if let Some(bb) = &n.bbox {
+            for (k, v) in STORED_BOX_FEATURES.iter().zip(bb.min.iter().chain(&bb.max)) {
+                let r = b.g.set_feature(id, k, FeatureValue::Float(f64::from(*v)));
+                b.edit(r)?;
+            }
         }
         if let Some(name) = &n.name {
             let r = b.g.set_feature(id, "name", FeatureValue::Str(name.clone()));
@@ -350,60 +376,63 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         let res = b.g.enable_bounding_box(NodeId(r.id));
         b.edit(res)?;
     }
-    // Mesh: claimed vertices as object mesh nodes, unclaimed ones per room.
-    if let Some(mesh) = &dsg.mesh {
-        let mut claimed = vec![false; mesh.points.len()];
-        let vanilla_mesh = if layout.per_room() {
-            None
-        } else {
-            Some(b.role_layer(LayerRole::Mesh)?)
+    // Object geometry: the claimed vertices as object mesh nodes, or the object's
+    // position when it claims no vertex present in the file.
+    let no_mesh = crate::DsgMesh::default();
+    let mesh = dsg.mesh.as_ref().unwrap_or(&no_mesh);
+    let mut claimed = vec![false; mesh.points.len()];
+    let vanilla_mesh = if layout.per_room() || (dsg.mesh.is_none() && sorted_objects.is_empty()) {
+        None
+    } else {
+        Some(b.role_layer(LayerRole::Mesh)?)
+    };
+    for (rank, o) in sorted_objects.iter().enumerate() {
+        let mut vertices: Vec<u32> = o.mesh_connections.clone();
+        vertices.sort_unstable();
+        vertices.dedup();
+        let mut points: Vec<Point> = vertices
+            .iter()
+            .filter_map(|&v| mesh.points.get(v as usize).copied())
+            .collect();
+        for &v in &vertices {
+            if let Some(c) = claimed.get_mut(v as usize) {
+                *c = true;
+            }
+        }
+        if points.is_empty() {
+            points.push(o.position);
+        }
+        let object = NodeId(o.id);
+        let layer = match vanilla_mesh {
+            Some(l) => l,
+            None => b.role_layer(LayerRole::ClaimedMesh {
+                room: NodeId(object_room[&o.id].expect("rooms")),
+            })?,
         };
-        for (rank, o) in sorted_objects.iter().enumerate() {
-            let mut vertices: Vec<u32> = o.mesh_connections.clone();
-            vertices.sort_unstable();
-            vertices.dedup();
-            let points: Vec<Point> = vertices
-                .iter()
-                .filter_map(|&v| mesh.points.get(v as usize).copied())
-                .collect();
-            for &v in &vertices {
-                if let Some(c) = claimed.get_mut(v as usize) {
-                    *c = true;
-                }
-            }
-            if points.is_empty() {
-                continue;
-            }
-            let object = NodeId(o.id);
-            let layer = match vanilla_mesh {
-                Some(l) => l,
-                None => b.role_layer(LayerRole::ClaimedMesh {
-                    room: NodeId(object_room[&o.id].expect("rooms")),
-                })?,
-            };
-            let object_layer =
-                b.g.node(object)
-                    .map(|n| b.g.node_layer(n))
-                    .expect("object added");
-            b.dag(object_layer, layer)?;
-            if layout == Layout::Saffron {
-                for (k, p) in points.into_iter().enumerate() {
-                    let id = prefixed(CLAIMED_POINT, (rank as u64) << 28 | k as u64);
-                    let r =
-                        b.g.add_node(id, layer)
-                            .and_then(|()| b.g.set_geometry(id, vec![p]))
-                            .and_then(|()| b.g.nest(object, id));
-                    b.edit(r)?;
-                }
-            } else {
-                let id = prefixed(MESH_GROUP, rank as u64);
+        let object_layer =
+            b.g.node(object)
+                .map(|n| b.g.node_layer(n))
+                .expect("object added");
+        b.dag(object_layer, layer)?;
+        if layout == Layout::Saffron {
+            for (k, p) in points.into_iter().enumerate() {
+                let id = prefixed(CLAIMED_POINT, (rank as u64) << 28 | k as u64);
                 let r =
                     b.g.add_node(id, layer)
-                        .and_then(|()| b.g.set_geometry(id, points))
+                        .and_then(|()| b.g.set_geometry(id, vec![p]))
                         .and_then(|()| b.g.nest(object, id));
                 b.edit(r)?;
             }
+        } else {
+            let id = prefixed(MESH_GROUP, rank as u64);
+            let r =
+                b.g.add_node(id, layer)
+                    .and_then(|()| b.g.set_geometry(id, points))
+                    .and_then(|()| b.g.nest(object, id));
+            b.edit(r)?;
         }
+    }
+    if let Some(mesh) = &dsg.mesh {
         // Unclaimed vertices.
         let mut per_room: BTreeMap<Option<u64>, Vec<(usize, Point)>> = BTreeMap::new();
         for (v, p) in mesh.points.iter().enumerate() {

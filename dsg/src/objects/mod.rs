@@ -7,7 +7,15 @@
 //! * An object's **geometry** is the set of mesh vertices it claims: the points of the
 //!   mesh node(s) nested under it in an object-mesh layer
 //!   (the layers whose [`LayerRole::holds_object_mesh`]). A vertex claimed by several objects counts
-//!   for each of them. An object without claimed vertices is never a spatial answer.
+//!   for each of them.
+//! * An object that claims **no mesh vertex present in the file** (the file saves no
+//!   mesh, as real Hydra output often does, or its `mesh_connections` is empty) is
+//!   located by its position: its geometry is its `attributes.position`, one point, held
+//!   by the one mesh node [`crate::layout::build`] nests under it on every layout. Its
+//!   stored Spark-DSG `bounding_box` is not its geometry; it is kept as the object
+//!   node's features [`STORED_BOX_FEATURES`] (min x, y, z, max x, y, z; the store's own
+//!   box of an object, in mint and saffron, is the exact box of its geometry). The nodes
+//!   of the other layers (places, rooms, agents, ...) have their position as geometry.
 //! * [`Objects::nearest_object`]: the object with the closest vertex (distance as
 //!   [`ygg_store::query::nearest_nodes`] defines it), ties to the smaller id.
 //! * [`Objects::objects_within`]: every object with a vertex at distance `<= r`
@@ -15,7 +23,10 @@
 //! * [`Objects::visible_objects`]: every object with a vertex `v` such that
 //!   `|v - eye| <= range` and the angle between `v - eye` and `dir` is at most the
 //!   half-angle (exactly the test of [`ygg_store::query::visible`] with a [`ygg_store::query::ConeView`]).
-//! * [`Objects::objects_with_label`]: every object node carrying the label. Object
+//! * [`Objects::objects_with_label`]: every object node carrying the label. An object
+//!   carries its labelspace name (from the file's `metadata.labelspaces`; without one,
+//!   its `name` unless that only spells its symbol) and always its decimal
+//!   `semantic_label` (`"5"`): see [`crate::DsgNode::labels`]. Object
 //!   nodes are the nodes of the object layers (those whose
 //!   [`LayerRole::holds_objects`]): `OBJECTS` in vanilla, `room:<id>/claimed-object` in
 //!   the per-room layouts.
@@ -61,6 +72,7 @@
 //!
 //! [`LayerRole::holds_object_mesh`]: crate::layout::LayerRole::holds_object_mesh
 //! [`LayerRole::holds_objects`]: crate::layout::LayerRole::holds_objects
+//! [`STORED_BOX_FEATURES`]: crate::layout::STORED_BOX_FEATURES
 
 mod catalog;
 mod distance;
