@@ -1,7 +1,7 @@
 //! The object catalog: [`Objects`] finds the object and object-mesh layers of a view
 //! and the objects that claim geometry, once for a batch of queries.
 
-use crate::layout::{LayerRole, layer_roles};
+use crate::layout::{LayerRole, layer_roles, layer_with_role};
 use rustc_hash::FxHashSet;
 use std::sync::OnceLock;
 use ygg_store::{Aabb, LayerId, NodeId, SceneView};
@@ -68,6 +68,11 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// Like [`Objects::new`], restricted to the objects in the sub-tree of `root` (a
     /// room, say): every query then answers among those objects only.
     ///
+    /// # Complexity
+    /// For a room of a per-room layout, O(1): its layers are found by role
+    /// ([`LayerRole::ClaimedObjects`], [`LayerRole::ClaimedMesh`]). Otherwise
+    /// O(objects in the layers below the root's layer × nesting depth).
+    ///
     /// # Examples
     /// ```
     /// # use ygg_dsg::{self as dsg, layout::{self, Layout}, objects::Objects}; use ygg_store::SceneView;
@@ -80,6 +85,9 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// assert!(here.iter().all(|o| everywhere.contains(o)));
     /// ```
     pub fn in_subtree(view: &'a V, root: NodeId) -> Self {
+        if let Some(room) = Self::room_layers(view, root) {
+            return room;
+        }
         Self::build(view, Some(root), |n| {
             let mut cur = view.parent(n);
             while let Some(p) = cur {
@@ -89,6 +97,25 @@ impl<'a, V: SceneView> Objects<'a, V> {
                 cur = view.node(p).and_then(|x| view.parent(x));
             }
             false
+        })
+    }
+
+    /// A room's objects in a per-room layout, found by role: its claimed-object layer
+    /// holds exactly the objects nested under the room (the layouts put each object in
+    /// its room's layer), and its claimed-mesh layer their geometry. `None` when `root`
+    /// is no room of a per-room layout.
+    fn room_layers(view: &'a V, root: NodeId) -> Option<Self> {
+        let room = root;
+        let objects = layer_with_role(view, LayerRole::ClaimedObjects { room })?;
+        let mesh = layer_with_role(view, LayerRole::ClaimedMesh { room });
+        Some(Objects {
+            view,
+            object_layers: vec![objects],
+            mesh_layers: mesh.into_iter().collect(),
+            layer_boxes: OnceLock::new(),
+            claimants: OnceLock::new(),
+            parts: OnceLock::new(),
+            kept: None,
         })
     }
 
