@@ -46,6 +46,9 @@ pub struct Objects<'a, V: SceneView> {
     pub(super) parts: OnceLock<Vec<Vec<Aabb>>>,
     /// With [`Objects::in_subtree`]: every object node kept (with geometry or not).
     pub(super) kept: Option<FxHashSet<NodeId>>,
+    /// Whether every layer-DAG parent of every mesh layer is an object layer: then the
+    /// parent of any mesh node is an object, and [`Objects::owner`] needs no lookup.
+    mesh_parents_are_objects: bool,
 }
 
 /// Whether `name` names an object layer (one whose [`LayerRole::holds_objects`]):
@@ -108,15 +111,12 @@ impl<'a, V: SceneView> Objects<'a, V> {
         let room = root;
         let objects = layer_with_role(view, LayerRole::ClaimedObjects { room })?;
         let mesh = layer_with_role(view, LayerRole::ClaimedMesh { room });
-        Some(Objects {
+        Some(Self::assemble(
             view,
-            object_layers: vec![objects],
-            mesh_layers: mesh.into_iter().collect(),
-            layer_boxes: OnceLock::new(),
-            claimants: OnceLock::new(),
-            parts: OnceLock::new(),
-            kept: None,
-        })
+            vec![objects],
+            mesh.into_iter().collect(),
+            None,
+        ))
     }
 
     /// [`Objects::new`] over the object nodes `keep` accepts; with a `root`, only the
@@ -170,6 +170,21 @@ impl<'a, V: SceneView> Objects<'a, V> {
             used_layers.dedup();
             mesh_layers = used_layers;
         }
+        Self::assemble(view, object_layers, mesh_layers, scoped.then_some(kept))
+    }
+
+    /// The catalog over these layers (ascending) and kept objects.
+    fn assemble(
+        view: &'a V,
+        object_layers: Vec<LayerId>,
+        mesh_layers: Vec<LayerId>,
+        kept: Option<FxHashSet<NodeId>>,
+    ) -> Self {
+        let mesh_parents_are_objects = mesh_layers.iter().all(|&m| {
+            view.layer_parents(m)
+                .iter()
+                .all(|p| object_layers.binary_search(p).is_ok())
+        });
         Objects {
             view,
             object_layers,
@@ -177,7 +192,8 @@ impl<'a, V: SceneView> Objects<'a, V> {
             layer_boxes: OnceLock::new(),
             claimants: OnceLock::new(),
             parts: OnceLock::new(),
-            kept: scoped.then_some(kept),
+            kept,
+            mesh_parents_are_objects,
         }
     }
 
@@ -308,7 +324,11 @@ impl<'a, V: SceneView> Objects<'a, V> {
     /// The object owning mesh node `mesh`: its parent, when that is a kept object node
     /// (which then has geometry: `mesh`).
     pub(super) fn owner(&self, mesh: NodeId) -> Option<NodeId> {
-        let parent = self.view.node(self.view.parent(self.view.node(mesh)?)?)?;
+        let parent = self.view.parent(self.view.node(mesh)?)?;
+        if self.mesh_parents_are_objects && self.kept.is_none() {
+            return Some(parent);
+        }
+        let parent = self.view.node(parent)?;
         let id = self.view.node_id(parent);
         (self
             .object_layers
