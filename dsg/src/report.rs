@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::error::DsgImportError;
+use super::error::{DsgImportError, LENIENT_HINT};
 use super::model::DsgGraph;
 
 /// How to import a Spark-DSG file ([`import_file`](crate::import_file),
@@ -26,10 +26,6 @@ impl ImportOptions {
     /// Lenient import.
     pub const LENIENT: Self = Self { lenient: true };
 }
-
-/// The appendix of the strict errors a lenient import would tolerate.
-pub(crate) const LENIENT_HINT: &str = " (strict import; a lenient import, `ygg-writer import \
-     --lenient` or `ImportOptions::LENIENT`, drops such items and reports them)";
 
 /// A kind of fault a lenient import drops (and a strict import refuses).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]

@@ -20,7 +20,7 @@
 
 use super::socket::PlainGraph;
 use super::{Res, unix_ns};
-use crate::ladder::after_ipc::{AnswerLine, mesh_checksum};
+use crate::ladder::answer_line::{AnswerLine, mesh_checksum};
 use crate::ladder::harness::Target;
 use crate::ladder::workload::Query;
 use crate::ladder::ygg::YggTarget;

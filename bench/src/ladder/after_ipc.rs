@@ -15,7 +15,7 @@
 //! just before the mutation (writer) to Unix ns once the reader has the answer (same host
 //! clock).
 
-use super::Answer;
+use super::answer_line::{AnswerLine, TAG, mesh_checksum};
 use super::harness::{Row, Target};
 use super::report::fmt_us;
 use super::workload::{Query, Workload};
@@ -23,95 +23,16 @@ use super::ygg::YggTarget;
 use crate::ipc::cases::{ATTACH_TIMEOUT, EXIT_GRACE, Jitter, writer};
 use crate::ipc::child::{ReaderProc, Scene, remove_stale};
 use crate::ipc::{Res, check_interrupted, install_signal_handler, unix_ns};
-use std::fmt;
-use std::str::FromStr;
 use std::time::{Duration, Instant};
 use ygg_dsg::DsgGraph;
 use ygg_dsg::layout::Layout;
 use ygg_store::{NodeId, Point, SceneGraph, SceneView};
 use ygg_testkit::stats::median_p99_us;
 
-/// First word of a reader's answer line.
-const TAG: &str = "q1a";
 /// Samples per target that are checked but not timed.
 const WARMUP: usize = 3;
 /// How long one answer may take.
 const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
-
-/// One answer of a reader in q1a mode:
-/// `q1a <generation> <visible ns> <answered ns> <ids> <mesh checksum>`, the ids
-/// comma-separated (`-` for none).
-#[derive(Clone, Debug, PartialEq)]
-pub struct AnswerLine {
-    /// Generation of the snapshot the query ran on.
-    pub generation: u64,
-    /// Unix ns when the reader held the snapshot's view.
-    pub visible_ns: u64,
-    /// Unix ns when the reader had the answer.
-    pub answered_ns: u64,
-    /// The answer (sorted object ids).
-    pub ids: Answer,
-    /// [`mesh_checksum`] of the moved object in the snapshot.
-    pub mesh_checksum: f64,
-}
-
-/// A checksum of `object`'s mesh in `view`: the sum of every coordinate of its mesh
-/// nodes (ids ascending), in f64, so the same points give the same bits in the writer's
-/// live graph and in a reader's snapshot.
-pub fn mesh_checksum<V: SceneView>(view: &V, object: NodeId) -> f64 {
-    let mut mesh = ygg_store::query::children(view, object);
-    mesh.sort_unstable();
-    mesh.iter()
-        .filter_map(|&m| view.node(m))
-        .flat_map(|n| view.points(n))
-        .flatten()
-        .map(|&c| f64::from(c))
-        .sum()
-}
-
-impl fmt::Display for AnswerLine {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{TAG} {} {} {} ",
-            self.generation, self.visible_ns, self.answered_ns
-        )?;
-        if self.ids.is_empty() {
-            f.write_str("-")?;
-        }
-        for (i, id) in self.ids.iter().enumerate() {
-            if i > 0 {
-                f.write_str(",")?;
-            }
-            write!(f, "{id}")?;
-        }
-        write!(f, " {}", self.mesh_checksum)
-    }
-}
-
-impl FromStr for AnswerLine {
-    type Err = String;
-
-    fn from_str(line: &str) -> Result<Self, String> {
-        let bad = || format!("malformed answer line {line:?}");
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let [TAG, generation, visible, answered, ids, checksum] = words[..] else {
-            return Err(bad());
-        };
-        let number = |s: &str| s.parse::<u64>().map_err(|_| bad());
-        let ids = match ids {
-            "-" => Vec::new(),
-            list => list.split(',').map(number).collect::<Result<_, _>>()?,
-        };
-        Ok(AnswerLine {
-            generation: number(generation)?,
-            visible_ns: number(visible)?,
-            answered_ns: number(answered)?,
-            ids,
-            mesh_checksum: checksum.parse().map_err(|_| bad())?,
-        })
-    }
-}
 
 /// The room and point of the Q1a `after_update_local` times: the workload's first Q1a in
 /// the moved object's room.
@@ -297,43 +218,4 @@ fn measure(
     reader.finish(EXIT_GRACE)?;
     drop(writer);
     Ok(s)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn answer_lines_round_trip() {
-        for ids in [vec![], vec![7], vec![3, 5_692_549_928_996_306_947]] {
-            let line = AnswerLine {
-                generation: 12,
-                visible_ns: 1_700_000_000_000_000_000,
-                answered_ns: 1_700_000_000_000_004_321,
-                ids,
-                mesh_checksum: -1_234.567_890_123_4,
-            };
-            assert_eq!(line.to_string().parse::<AnswerLine>(), Ok(line));
-        }
-        assert_eq!(
-            "q1a 4 10 20 - 0.5".parse::<AnswerLine>().map(|l| l.ids),
-            Ok(vec![])
-        );
-    }
-
-    #[test]
-    fn malformed_answer_lines_are_rejected() {
-        for line in [
-            "",
-            "q1a 4 10 20 1",
-            "q1a 4 10 20 1,2 0.5 extra",
-            "seen 4 10 20 1 0.5",
-            "q1a 4 10 x 1 0.5",
-            "q1a 4 10 20 1,,2 0.5",
-            "q1a -4 10 20 1 0.5",
-            "q1a 4 10 20 1 x",
-        ] {
-            assert!(line.parse::<AnswerLine>().is_err(), "{line:?} parsed");
-        }
-    }
 }

@@ -2,6 +2,7 @@
 //! saffron) on the office workload, with answers checked identical before timing.
 
 pub mod after_ipc;
+pub mod answer_line;
 pub mod flat_dsg;
 pub mod harness;
 pub mod kiddo_floor;
