@@ -3,6 +3,7 @@
 mod demo;
 mod ipc;
 mod ladder;
+mod soak;
 
 use clap::{Parser, Subcommand};
 use ygg_store::{NodeId, SceneGraph};
@@ -28,6 +29,10 @@ enum Command {
     Ladder(ladder::LadderArgs),
     /// Multi-process publish-to-visible latency: shared memory vs a Unix socket.
     Ipc(ipc::IpcArgs),
+    /// Soak: the office stream for minutes while readers attach, detach, get killed and
+    /// restart and the writer is restarted twice; fails on a wrong answer or on growth of
+    /// memory, descriptors or /dev/shm files.
+    Soak(soak::SoakArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -37,6 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
+        Command::Soak(args) => soak::run(&args),
     }
 }
 
