@@ -125,3 +125,57 @@ impl Window {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ygg_dsg::office::{OfficeParams, generate};
+
+    #[test]
+    fn the_scene_stops_growing_once_the_window_is_full() {
+        let mut g = layout::build(
+            &generate(OfficeParams {
+                seed: 7,
+                scale: 0.05,
+            }),
+            layout::Layout::Mint,
+        )
+        .expect("office");
+        let keep = Keep {
+            keep_poses: Some(20),
+            keep_objects: Some(2),
+            keep_mesh_points: Some(128),
+        };
+        let mut replay = SlamReplay::new(&g, 7);
+        let mut window = Window::new(&g, keep);
+        let points = |g: &SceneGraph| -> usize {
+            g.layers()
+                .flat_map(|l| {
+                    g.layer_nodes(l)
+                        .map(|n| g.points(n).len())
+                        .collect::<Vec<_>>()
+                })
+                .sum()
+        };
+        let mut sizes = Vec::new();
+        for tick in 1..=1500 {
+            let report = replay.step(&mut g).expect("step");
+            window.trim(&mut g, &replay, report).expect("trim");
+            if tick % 300 == 0 {
+                sizes.push((g.node_count(), points(&g)));
+            }
+        }
+        g.check_invariants().expect("a consistent graph");
+        // Full after 2 new objects (300 ticks) and 2 mesh patches per room: from then on
+        // the node count is constant and the points vary only with the objects' meshes.
+        assert!(
+            sizes.windows(2).skip(1).all(|w| w[0].0 == w[1].0),
+            "{sizes:?}"
+        );
+        let (min, max) = sizes[1..]
+            .iter()
+            .fold((usize::MAX, 0), |(a, b), s| (a.min(s.1), b.max(s.1)));
+        assert!(max - min <= 2 * 48, "points {sizes:?}");
+        assert!(replay.pose().is_some_and(|(p, _)| g.node(p).is_some()));
+    }
+}
