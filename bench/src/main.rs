@@ -4,6 +4,7 @@ mod demo;
 mod dsg_io;
 mod ipc;
 mod ladder;
+mod soak;
 
 use clap::{Parser, Subcommand};
 use ygg_store::{NodeId, SceneGraph};
@@ -31,6 +32,10 @@ enum Command {
     Ipc(ipc::IpcArgs),
     /// Importing the full office (JSON and binary) against spark_dsg's own load.
     DsgIo(dsg_io::DsgIoArgs),
+    /// Soak: the office stream for minutes while readers attach, detach, get killed and
+    /// restart and the writer is restarted twice; fails on a wrong answer or on growth of
+    /// memory, descriptors or /dev/shm files.
+    Soak(soak::SoakArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -41,6 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
         Command::DsgIo(args) => dsg_io::run(&args),
+        Command::Soak(args) => soak::run(&args),
     }
 }
 

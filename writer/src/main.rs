@@ -5,6 +5,7 @@
 //! synthetic segments of chosen sizes, the driver of the transport tests in `tests/`.
 
 mod import;
+mod window;
 
 use std::process::ExitCode;
 use std::time::Duration;
@@ -35,7 +36,8 @@ enum Command {
     /// Serve a scene (a `.ygg` file or the built-in office) under a scene name, and
     /// optionally replay a SLAM-like stream of updates at a given rate.
     ///
-    /// Prints one JSON line per second (`{"event":"progress",...}`) and a final
+    /// Prints a `{"event":"ready",...}` line naming the writer session once the scene is
+    /// published, one JSON line per second (`{"event":"progress",...}`) and a final
     /// `{"event":"summary",...}` line. Exits cleanly, removing its shared memory, on
     /// SIGINT/SIGTERM or after --seconds.
     Serve(Serve),
@@ -65,6 +67,9 @@ struct Serve {
     /// Stop after this many seconds; default: run until signalled.
     #[arg(long)]
     seconds: Option<f64>,
+    /// How much of what the stream adds to keep (a sliding window; default: all).
+    #[command(flatten)]
+    keep: window::Keep,
     /// Readers the scene supports at once.
     #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
@@ -250,7 +255,8 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
     let first = writer.publish()?;
     println!(
         "{}",
-        serde_json::json!({"event": "ready", "scene": args.scene, "nodes": writer.graph().node_count(),
+        serde_json::json!({"event": "ready", "scene": args.scene, "session": writer.publisher().session(),
+            "nodes": writer.graph().node_count(),
             "load_ms": loaded.as_secs_f64() * 1e3, "first_publish_bytes": first.bytes_sent})
     );
     let period = if args.rate > 0.0 {
@@ -262,6 +268,7 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
     let mut next = start + period;
     let (mut ticks, mut update_ns, mut publish_ns, mut bytes) = (0u64, 0u128, 0u128, 0usize);
     let mut last_report = start;
+    let mut window = window::Window::new(writer.graph(), args.keep);
     let stop_reason = loop {
         if args
             .seconds
@@ -271,7 +278,8 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         }
         if args.rate > 0.0 {
             let t0 = Instant::now();
-            replay.step(writer.graph_mut())?;
+            let report = replay.step(writer.graph_mut())?;
+            window.trim(writer.graph_mut(), &replay, report)?;
             let t1 = Instant::now();
             let r = writer.publish()?;
             update_ns += (t1 - t0).as_nanos();

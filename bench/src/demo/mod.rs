@@ -31,10 +31,123 @@ pub struct DemoArgs {
     pub rate: f64,
 }
 
-const ROLES: [&str; 3] = ["planner", "visibility", "labels"];
+/// The reader roles (`ygg-bench role --role ...`), in the order `--readers` cycles.
+pub(crate) const ROLES: [&str; 3] = ["planner", "visibility", "labels"];
 
 /// How long the writer may take to build the office and serve it.
-const WRITER_READY: Duration = Duration::from_secs(120);
+pub(crate) const WRITER_READY: Duration = Duration::from_secs(120);
+
+/// A flag that Ctrl-C (SIGINT) sets.
+pub(crate) fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))?;
+    Ok(stop)
+}
+
+/// The scene of a run: a unique name and an iceoryx2 prefix of its own (so the run can
+/// tell its files from anyone else's and remove them), or the prefix a caller set in
+/// [`ENV_IOX2_PREFIX`] (tests do). First removes what killed earlier runs left.
+pub(crate) fn run_scene(tag: &str) -> TestScene {
+    let removed = ygg_testkit::remove_stale();
+    if removed > 0 {
+        eprintln!("removed {removed} files left by earlier, killed runs");
+    }
+    let mut scene = TestScene::new(tag);
+    if let Ok(prefix) = std::env::var(ENV_IOX2_PREFIX) {
+        scene.prefix = prefix;
+    }
+    scene
+}
+
+/// Starts `ygg-writer serve` on `scene`: the built-in office at `scale`, updated `rate`
+/// times a second, exiting by itself after `seconds`, with `extra` arguments.
+pub(crate) fn start_writer(
+    scene: &TestScene,
+    rate: f64,
+    scale: f64,
+    seconds: f64,
+    extra: &[&str],
+    label: &str,
+) -> std::io::Result<Proc> {
+    let args = [
+        "serve".to_owned(),
+        "--scene".to_owned(),
+        scene.name.clone(),
+        "--seconds".to_owned(),
+        format!("{seconds}"),
+        "--rate".to_owned(),
+        format!("{rate}"),
+        "--scale".to_owned(),
+        format!("{scale}"),
+    ];
+    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+    args.extend_from_slice(extra);
+    let writer_bin = ygg_testkit::binary("ygg-writer");
+    Proc::start(scene.command_for(&writer_bin, &args), label, Input::Null)
+}
+
+/// Starts the reader role `role` (`ygg-bench role`, this executable) on `scene` for
+/// `seconds`, with `extra` arguments.
+pub(crate) fn start_role(
+    scene: &TestScene,
+    role: &str,
+    seconds: f64,
+    extra: &[&str],
+    label: &str,
+) -> std::io::Result<Proc> {
+    let seconds = format!("{seconds}");
+    let mut args = vec![
+        "role",
+        "--scene",
+        &scene.name,
+        "--role",
+        role,
+        "--seconds",
+        &seconds,
+    ];
+    args.extend_from_slice(extra);
+    let roles_bin = std::env::current_exe()?;
+    Proc::start(scene.command_for(&roles_bin, &args), label, Input::Null)
+}
+
+/// Waits until `writer` prints its `ready` line and returns it parsed.
+///
+/// # Errors
+/// When the writer exits first, `stop` is set, or it is not ready within
+/// [`WRITER_READY`]:
+/// a message with the end of its stderr.
+pub(crate) fn wait_ready(writer: &mut Proc, stop: &AtomicBool) -> Result<Value, String> {
+    let until = Instant::now() + WRITER_READY;
+    loop {
+        let seen = writer.wait_line_after(0, Duration::from_millis(100), |l| {
+            l.contains("\"event\":\"ready\"")
+        });
+        if let Some(v) = seen.and_then(|(_, l)| serde_json::from_str(&l).ok()) {
+            return Ok(v);
+        }
+        let why = if stop.load(Ordering::SeqCst) {
+            "interrupted"
+        } else if writer.try_status().is_some() {
+            "it exited"
+        } else if Instant::now() >= until {
+            "not ready in time"
+        } else {
+            continue;
+        };
+        return Err(format!(
+            "{} did not start ({why}):\n{}",
+            writer.label(),
+            stderr_tail(writer)
+        ));
+    }
+}
+
+/// The end of a process's stderr, for an error message.
+pub(crate) fn stderr_tail(proc: &Proc) -> String {
+    let lines = proc.stderr();
+    lines[lines.len().saturating_sub(20)..].join("\n")
+}
 
 /// A process of the demo: its name, progress bar and summary line.
 struct Member {
@@ -57,12 +170,6 @@ impl Member {
     fn exited(&mut self) -> bool {
         self.proc.try_status().is_some()
     }
-
-    /// The end of its stderr, for an error message.
-    fn stderr_tail(&self) -> String {
-        let lines = self.proc.stderr();
-        lines[lines.len().saturating_sub(20)..].join("\n")
-    }
 }
 
 /// Runs the demo.
@@ -73,24 +180,8 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
     if args.readers == 0 || args.readers > 16 {
         return Err("--readers must be between 1 and 16".into());
     }
-    let writer_bin = ygg_testkit::binary("ygg-writer");
-    // The reader roles run in this executable (`ygg-bench role`).
-    let roles_bin = std::env::current_exe()?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))?;
-    }
-    let removed = ygg_testkit::remove_stale();
-    if removed > 0 {
-        eprintln!("removed {removed} files left by earlier, killed runs");
-    }
-    // Children share one iceoryx2 prefix of their own, so the demo can tell its files
-    // from anyone else's and remove them; a caller may choose it (tests do).
-    let mut scene = TestScene::new("demo");
-    if let Ok(prefix) = std::env::var(ENV_IOX2_PREFIX) {
-        scene.prefix = prefix;
-    }
+    let stop = stop_on_ctrl_c()?;
+    let scene = run_scene("demo");
     let multi = MultiProgress::new();
     let style = ProgressStyle::with_template("{prefix:>12} [{elapsed_precise}] {bar:30} {msg}")?;
     let bar = |name: &str| {
@@ -105,22 +196,13 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         "Yggdrasil demo: one writer, {} readers, scene {}, {:.0} s",
         args.readers, scene.name, args.seconds
     );
-    let writer_args = [
-        "serve".to_owned(),
-        "--scene".to_owned(),
-        scene.name.clone(),
-        "--seconds".to_owned(),
-        format!("{}", args.seconds + 30.0),
-        "--rate".to_owned(),
-        format!("{}", args.rate),
-        "--scale".to_owned(),
-        format!("{}", args.scale),
-    ];
-    let writer_args: Vec<&str> = writer_args.iter().map(String::as_str).collect();
-    let writer = Proc::start(
-        scene.command_for(&writer_bin, &writer_args),
+    let writer = start_writer(
+        &scene,
+        args.rate,
+        args.scale,
+        args.seconds + 30.0,
+        &[],
         "writer",
-        Input::Null,
     )?;
     let mut procs = vec![Member {
         name: "writer".into(),
@@ -130,46 +212,17 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
     }];
     procs[0].bar.set_message("building the office...");
 
-    // Wait for the writer to serve.
-    let until = Instant::now() + WRITER_READY;
-    let ready = loop {
-        let seen = procs[0]
-            .proc
-            .wait_line_after(0, Duration::from_millis(100), |l| {
-                l.contains("\"event\":\"ready\"")
-            });
-        procs[0].poll();
-        if seen.is_some() {
-            break true;
-        }
-        if stop.load(Ordering::SeqCst) || procs[0].exited() || Instant::now() >= until {
-            break false;
-        }
-    };
-    if !ready {
-        let why = procs[0].stderr_tail();
+    if let Err(why) = wait_ready(&mut procs[0].proc, &stop) {
         drop(procs);
         scene.clean_up();
-        return Err(format!("the writer did not start:\n{why}").into());
+        return Err(why.into());
     }
+    procs[0].poll();
     let start = Instant::now();
     for i in 0..args.readers {
         let role = ROLES[i % ROLES.len()];
         let name = format!("{role}-{i}");
-        let seconds = format!("{}", args.seconds);
-        let command = scene.command_for(
-            &roles_bin,
-            &[
-                "role",
-                "--scene",
-                &scene.name,
-                "--role",
-                role,
-                "--seconds",
-                &seconds,
-            ],
-        );
-        let proc = Proc::start(command, name.clone(), Input::Null)?;
+        let proc = start_role(&scene, role, args.seconds, &[], &name)?;
         procs.push(Member {
             bar: bar(&name),
             name,
@@ -211,7 +264,7 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         .iter_mut()
         .filter_map(|p| {
             let ok = p.summary.is_some() && p.proc.try_status().is_some_and(|s| s.success());
-            (!ok).then(|| format!("{}:\n{}", p.name, p.stderr_tail()))
+            (!ok).then(|| format!("{}:\n{}", p.name, stderr_tail(&p.proc)))
         })
         .collect();
     let (checked, matched) = checks(&procs);

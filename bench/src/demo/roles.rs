@@ -3,11 +3,15 @@
 //! the visibility checker through [`Objects`] over the current room's objects), checking
 //! a sample of its answers against brute force on the same snapshot, and printing JSON
 //! progress and summary lines.
+//!
+//! When the writer goes away a role prints a `warning` line, keeps querying its last
+//! snapshot and picks up a restarted writer (DESIGN.md §5); progress lines name the
+//! writer `session` of the snapshot queried, so a driver can see the pickup.
 
 use std::time::{Duration, Instant};
 use ygg_dsg::layout::{self, LayerRole};
 use ygg_dsg::objects::{self, Objects};
-use ygg_reader::{SceneReader, SceneSnapshot};
+use ygg_reader::{ReaderOpenError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, ConeView};
 use ygg_store::snapshot::ArchivedScene;
 use ygg_store::{NodeId, Point, SceneView, Scope};
@@ -55,7 +59,18 @@ const RANGE: f32 = 5.0;
 pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     // Started by the demo: stop when it dies.
     ygg_testkit::die_with_parent()?;
-    let mut reader = attach(&args.scene, args.wait_for_writer)?;
+    let mut reader = match attach(&args.scene, args.wait_for_writer) {
+        Err(ReaderOpenError::Terminated) => {
+            // Stopped while waiting for a writer: a clean stop with nothing to report.
+            println!(
+                "{}",
+                serde_json::json!({"event": "summary", "role": format!("{:?}", args.role).to_lowercase(),
+                    "attached": false, "batches": 0, "checked": 0, "matched": 0})
+            );
+            return Ok(());
+        }
+        reader => reader?,
+    };
     let start = Instant::now();
     let deadline = start + Duration::from_secs_f64(args.seconds.max(0.0));
     let (mut query_ns, mut visible_ns, mut staleness) = (Vec::new(), Vec::new(), Vec::new());
@@ -63,7 +78,8 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     let (checks, checker) = Checker::spawn();
     let mut current: Option<SceneSnapshot> = None;
     let mut last_progress = start;
-    let mut writer_gone = false;
+    // Times the writer went away, and whether a receive error is unanswered by a snapshot.
+    let (mut writer_gone, mut away) = (0u64, false);
     while Instant::now() < deadline && !reader.termination_requested() {
         match reader.wait_next(Duration::from_millis(20)) {
             Ok(Some(s)) => {
@@ -81,17 +97,25 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
                     }
                     snapshots += 1;
                     current = Some(s);
+                    away = false;
                 }
             }
             Ok(None) => {}
+            Err(SceneReceiveError::Receive(ygg_reader::ReceiveError::Terminated)) => break,
             Err(e) => {
-                if !writer_gone {
+                if !away {
                     println!(
                         "{}",
                         serde_json::json!({"event": "warning", "role": format!("{:?}", args.role), "message": e.to_string()})
                     );
                 }
-                writer_gone = true;
+                if matches!(
+                    e,
+                    SceneReceiveError::Receive(ygg_reader::ReceiveError::WriterGone { .. })
+                ) {
+                    writer_gone += 1;
+                }
+                away = true;
                 std::thread::sleep(Duration::from_millis(20));
             }
         }
@@ -111,7 +135,7 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
             println!(
                 "{}",
                 serde_json::json!({"event": "progress", "queries": query_ns.len(), "generation": snap.generation(),
-                    "seconds": start.elapsed().as_secs_f64(), "checked": checker.checked(), "matched": checker.matched()})
+                    "session": snap.raw().session(), "seconds": start.elapsed().as_secs_f64(), "checked": checker.checked(), "matched": checker.matched()})
             );
         }
     }
@@ -195,11 +219,11 @@ impl Checker {
     }
 }
 
-fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, Box<dyn std::error::Error>> {
-    Ok(SceneReader::builder(scene)
+fn attach(scene: &str, wait_secs: f64) -> Result<SceneReader, ReaderOpenError> {
+    SceneReader::builder(scene)
         .handle_termination_signals(true)
         .wait_for_writer(Duration::from_secs_f64(wait_secs.max(0.0)))
-        .open()?)
+        .open()
 }
 
 /// One query of a role, kept so the answer can be re-checked by brute force.

@@ -600,7 +600,8 @@ fn open_event_service(
         .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))
 }
 
-/// Answers reader announcements and removes resources of dead readers until `stop` is set.
+/// Answers reader announcements, removes resources of dead readers and drops connections of
+/// departed ones until `stop` is set.
 fn helper_loop(
     inner: &Mutex<Inner>,
     listener: &Listener<Ipc>,
@@ -629,6 +630,10 @@ fn helper_loop(
         }
         if last_cleanup.elapsed() >= CLEANUP_INTERVAL {
             cleanup_dead_nodes(config);
+            // Drops the connections (shared-memory files and descriptors) of readers that
+            // left or died; a layer that is not republished would otherwise keep them
+            // until the next reader announces itself.
+            lock(inner).update_connections();
             last_cleanup = Instant::now();
         }
     }

@@ -19,6 +19,10 @@ pub enum ReaderOpenError {
         /// The scene.
         scene: String,
     },
+    /// SIGINT or SIGTERM arrived while waiting for a writer (only with
+    /// [`SubscriberBuilder::handle_termination_signals`](crate::SubscriberBuilder::handle_termination_signals)).
+    #[error("termination requested by a signal while waiting for a writer")]
+    Terminated,
 }
 
 /// Why receiving a snapshot failed. The last good snapshot stays available through

@@ -2,7 +2,8 @@
 //! consistent snapshots.
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Weak};
 use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
@@ -119,7 +120,9 @@ impl SubscriberBuilder {
     /// # Errors
     ///
     /// [`ReaderOpenError::NoWriter`] if no writer ever created the scene (or all are gone and
-    /// cleaned up), otherwise the variant naming the failing resource.
+    /// cleaned up), [`ReaderOpenError::Terminated`] on SIGINT/SIGTERM while waiting for one
+    /// (when [`SubscriberBuilder::handle_termination_signals`] is on), otherwise the variant
+    /// naming the failing resource.
     pub fn open(self) -> Result<SegmentSubscriber, ReaderOpenError> {
         let deadline = Instant::now() + self.wait_for_writer;
         loop {
@@ -137,9 +140,10 @@ impl SubscriberBuilder {
         let config =
             protocol::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
         let node = crate::service::create_node("ygg-reader", services.scene(), &config)?;
-        if self.handle_termination_signals {
-            // The first wait installs iceoryx2's signal handler; a zero wait returns at once.
-            let _ = node.wait(Duration::ZERO);
+        // The first wait installs iceoryx2's signal handler; a zero wait returns at once, with
+        // an error when a signal arrived since the last attempt (while waiting for a writer).
+        if self.handle_termination_signals && node.wait(Duration::ZERO).is_err() {
+            return Err(ReaderOpenError::Terminated);
         }
 
         // Listener first, so that no event sent after the subscribers exist is missed.
@@ -161,10 +165,12 @@ impl SubscriberBuilder {
             config,
             liveness_interval: self.liveness_interval,
             handle_signals: self.handle_termination_signals,
+            terminated: AtomicBool::new(false),
             manifest,
             layers: BTreeMap::new(),
             pending_manifest: None,
             current: None,
+            retired: None,
             delivered: None,
             status: WriterStatus::Unknown,
             gone_unreported: false,
@@ -224,10 +230,16 @@ pub struct SegmentSubscriber {
     config: Config,
     liveness_interval: Duration,
     handle_signals: bool,
+    /// A termination signal was seen (iceoryx2 reports each one only once).
+    terminated: AtomicBool,
     manifest: SubPort,
     layers: BTreeMap<u32, LayerPort>,
     pending_manifest: Option<PendingManifest>,
     current: Option<Arc<Snapshot>>,
+    /// The last snapshot of an earlier writer session, until the application drops it:
+    /// iceoryx2 drops a reader's connections to a writer that is gone only in a receive
+    /// after their samples were returned, so every layer is received once more then.
+    retired: Option<Weak<Snapshot>>,
     /// (session, generation) of the snapshot last handed out.
     delivered: Option<(u64, u64)>,
     status: WriterStatus,
@@ -262,11 +274,17 @@ impl SegmentSubscriber {
         self.status
     }
 
-    /// Whether SIGINT or SIGTERM arrived since the last call (always false unless
-    /// [`SubscriberBuilder::handle_termination_signals`] is on). Lets an application that waits
-    /// elsewhere (not in [`wait_next`](Self::wait_next)) notice the request.
+    /// Whether SIGINT or SIGTERM arrived since the reader was opened (always false unless
+    /// [`SubscriberBuilder::handle_termination_signals`] is on); once true it stays true, also
+    /// after [`wait_next`](Self::wait_next) returned [`ReceiveError::Terminated`]. Lets an
+    /// application that waits elsewhere notice the request.
     pub fn termination_requested(&self) -> bool {
-        self.handle_signals && self.node.wait(Duration::ZERO).is_err()
+        if self.handle_signals && !self.terminated.load(Ordering::Relaxed) {
+            // iceoryx2 hands out each signal once: remember it.
+            let seen = self.node.wait(Duration::ZERO).is_err();
+            self.terminated.fetch_or(seen, Ordering::Relaxed);
+        }
+        self.terminated.load(Ordering::Relaxed)
     }
 
     /// The newest complete snapshot received so far, without receiving anything.
@@ -435,7 +453,34 @@ impl SegmentSubscriber {
             first_error = first_error.or(error);
         }
 
-        // 4. Assemble.
+        // 4. Once the last snapshot of an earlier writer is released, receive from every
+        //    layer: iceoryx2 then drops the connections to that writer (shared-memory files
+        //    and descriptors), which a layer that is never republished would keep.
+        if self.retired.as_ref().is_some_and(|w| w.strong_count() == 0) {
+            self.retired = None;
+            let session = self.current.as_ref().map(|c| c.session);
+            for (&layer_id, layer) in &mut self.layers {
+                let wanted = self
+                    .current
+                    .as_ref()
+                    .and_then(|c| Some((c.session, c.layer_generation(layer_id)?)));
+                let (port, pending) = (&layer.port, &mut layer.pending);
+                let error = drain(port, |sample| {
+                    let segment = HeldSegment::new(sample, SegmentKind::Layer, Some(layer_id))
+                        .map_err(|source| ReceiveError::Corrupt {
+                            service: port.name.clone(),
+                            source,
+                        })?;
+                    if Some(segment.header().session) == session {
+                        keep_pending(pending, wanted, segment);
+                    }
+                    Ok(())
+                });
+                first_error = first_error.or(error);
+            }
+        }
+
+        // 5. Assemble.
         self.try_assemble();
 
         if new_subscribers {
@@ -495,6 +540,9 @@ impl SegmentSubscriber {
                 .retain(|s| s.header().session == session && s.header().generation > generation);
             true
         });
+        if let Some(old) = self.current.as_ref().filter(|c| c.session != session) {
+            self.retired = Some(Arc::downgrade(old));
+        }
         self.current = Some(Arc::new(snapshot));
     }
 
