@@ -104,3 +104,22 @@ fn cargo_build(cargo: &Path, profile_dir: &Path, what: &[&str]) {
         String::from_utf8_lossy(&output.stderr)
     );
 }
+
+/// Runs executable `name` ([`binary`]) with `args` to completion, stdin `/dev/null`,
+/// iceoryx2's log level left to its default.
+///
+/// # Panics
+/// If the process cannot be started.
+pub fn run(name: &str, args: &[&dyn AsRef<std::ffi::OsStr>]) -> std::process::Output {
+    std::process::Command::new(binary(name))
+        .args(args.iter().map(|a| -> &std::ffi::OsStr { (*a).as_ref() }))
+        .env_remove("IOX2_LOG_LEVEL")
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("spawn")
+}
+
+/// Process output as text (lossy UTF-8).
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}

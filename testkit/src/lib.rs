@@ -20,7 +20,7 @@ mod scene;
 pub mod stats;
 mod watchdog;
 
-pub use binary::{ENV_BIN_DIR, binary, example};
+pub use binary::{ENV_BIN_DIR, binary, example, run, text};
 pub use proc::{DROP_GRACE, ENV_PARENT_PID, Input, LineError, Proc, die_with_parent, field};
 pub use scene::{ICEORYX2_DIR, PREFIX_TAG, SHM_DIR, TestScene, remove_stale};
 pub use watchdog::Watchdog;

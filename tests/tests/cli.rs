@@ -11,26 +11,13 @@ use serde_json::{Value, json};
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::objects::{ObjectQuery, Objects};
 use ygg_dsg::{DsgGraph, NodeKind};
-use ygg_testkit::{TestScene, binary};
+use ygg_testkit::{TestScene, binary, run, text};
 use ygg_writer::SceneWriter;
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../dsg/tests/fixtures")
         .join(name)
-}
-
-fn run(bin: &str, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {
-    Command::new(binary(bin))
-        .args(args.iter().map(|a| -> &std::ffi::OsStr { (*a).as_ref() }))
-        .env_remove("IOX2_LOG_LEVEL")
-        .stdin(Stdio::null())
-        .output()
-        .expect("spawn")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// Asserts a clean failure: non-zero exit, no panic, and `needles` in stderr.

@@ -5,26 +5,12 @@
 //! example; the snapshot answers object queries.
 
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
 
 use serde_json::{Value, json};
 use ygg_dsg::NodeSymbol;
 use ygg_dsg::objects::Objects;
 use ygg_store::SnapshotFile;
-use ygg_testkit::binary;
-
-fn run(bin: &str, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Output {
-    Command::new(binary(bin))
-        .args(args.iter().map(|a| -> &std::ffi::OsStr { (*a).as_ref() }))
-        .env_remove("IOX2_LOG_LEVEL")
-        .stdin(Stdio::null())
-        .output()
-        .expect("spawn")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use ygg_testkit::{run, text};
 
 /// apartment_dsg.json plus an edge to the absent p(99999), a reversed copy of its first
 /// edge and an object in layer 9.
