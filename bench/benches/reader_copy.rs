@@ -1,7 +1,9 @@
 //! What the reader's copy-then-validate mode costs (`SceneReaderBuilder::copy_segments`):
 //! one object of the built-in office (mint) moved, published, and the new snapshot
 //! received, validated and queried, zero-copy against copy mode, in one process. Also the
-//! first snapshot of a newly attached reader (every layer received and validated).
+//! first snapshot of a newly attached reader (every layer received and validated). Paired:
+//! both modes do the same work in every iteration, in alternating order, and each benchmark
+//! times one of them.
 #![expect(clippy::unwrap_used, reason = "acceptable in benchmarks")]
 #![allow(missing_docs, reason = "criterion macros generate undocumented items")]
 
@@ -61,32 +63,60 @@ fn reader_copy(c: &mut Criterion) {
         .unwrap();
     writer.publish().unwrap();
 
+    // Both readers are attached and receive every update; each benchmark times one of
+    // them. The two benchmarks do the same work, and which reader receives first alternates,
+    // so neither run order nor the host's drift favours a mode.
+    let mut readers = MODES.map(|(_, copy)| open(scene, &prefix, copy));
+    for reader in &mut readers {
+        receive(reader, writer.generation());
+    }
     let mut group = c.benchmark_group("reader_copy");
     group.measurement_time(Duration::from_secs(5));
-    for (tag, copy) in MODES {
-        let mut reader = open(scene, &prefix, copy);
-        receive(&mut reader, writer.generation());
-        let mut step = 0u32;
+    let mut step = 0u32;
+    for (timed, (tag, _)) in MODES.iter().enumerate() {
         group.bench_function(format!("object_moved/{tag}"), |b| {
             b.iter_custom(|iters| {
-                let start = Instant::now();
+                let mut spent = Duration::ZERO;
                 for _ in 0..iters {
                     step += 1;
                     let dx = (step % 2) as f32 * 0.25;
                     let moved = points.iter().map(|p| [p[0] + dx, p[1], p[2]]).collect();
                     writer.graph_mut().set_geometry(mesh_node, moved).unwrap();
                     let generation = writer.publish().unwrap().generation;
-                    let snapshot = receive(&mut reader, generation);
-                    let view = snapshot.view();
-                    black_box(nearest_nodes(&view, Scope::Layer(mesh), points[0], 1).unwrap());
+                    for turn in 0..MODES.len() {
+                        let which = (turn + step as usize) % MODES.len();
+                        let start = Instant::now();
+                        let snapshot = receive(&mut readers[which], generation);
+                        let view = snapshot.view();
+                        black_box(nearest_nodes(&view, Scope::Layer(mesh), points[0], 1).unwrap());
+                        if which == timed {
+                            spent += start.elapsed();
+                        }
+                    }
                 }
-                start.elapsed()
+                spent
             })
         });
+    }
+    drop(readers);
+    let mut attach = 0usize;
+    for (timed, (tag, _)) in MODES.iter().enumerate() {
         group.bench_function(format!("first_snapshot/{tag}"), |b| {
-            b.iter(|| {
-                let mut fresh = open(scene, &prefix, copy);
-                black_box(receive(&mut fresh, writer.generation()).view().node_count())
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    attach += 1;
+                    for turn in 0..MODES.len() {
+                        let which = (turn + attach) % MODES.len();
+                        let start = Instant::now();
+                        let mut fresh = open(scene, &prefix, MODES[which].1);
+                        black_box(receive(&mut fresh, writer.generation()).view().node_count());
+                        if which == timed {
+                            spent += start.elapsed();
+                        }
+                    }
+                }
+                spent
             })
         });
     }

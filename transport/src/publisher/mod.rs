@@ -1,6 +1,7 @@
 //! The writer side: one scene's segment publisher.
 
 mod error;
+mod heap;
 mod loan;
 mod segment_publisher;
 pub mod shm;

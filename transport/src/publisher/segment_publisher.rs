@@ -629,26 +629,33 @@ fn helper_loop(
             inner.notify(EVENT_SNAPSHOT_PUBLISHED);
         }
         if last_cleanup.elapsed() >= CLEANUP_INTERVAL {
-            cleanup_dead_nodes(config);
+            let removed = cleanup_dead_nodes(config);
             // Drops the connections (shared-memory files and descriptors) of readers that
             // left or died; a layer that is not republished would otherwise keep them
             // until the next reader announces itself.
             lock(inner).update_connections();
+            if removed > 0 {
+                super::heap::release_free_heap();
+            }
             last_cleanup = Instant::now();
         }
     }
 }
 
 /// Removes the resources of dead processes (readers killed without cleanup), freeing their
-/// subscriber slots and the samples they held.
-fn cleanup_dead_nodes(config: &Config) {
+/// subscriber slots and the samples they held. Returns how many dead nodes this call removed.
+fn cleanup_dead_nodes(config: &Config) -> usize {
+    let mut removed = 0;
     let _ = Node::<Ipc>::list(config, |state| {
-        if let NodeState::Dead(view) = state {
-            // Another process may be cleaning up the same node; that is fine.
-            let _ = view.try_remove_stale_resources();
+        // Another process may be cleaning up the same node; then this one fails, harmlessly.
+        if let NodeState::Dead(view) = state
+            && view.try_remove_stale_resources().is_ok()
+        {
+            removed += 1;
         }
         CallbackProgression::Continue
     });
+    removed
 }
 
 /// A new, practically unique writer session id (time and pid, mixed).
