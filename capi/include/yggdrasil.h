@@ -206,7 +206,8 @@ enum ygg_status ygg_graph_add_layer(struct ygg_graph *graph, const char *name, u
 // `name` is null or NUL-terminated; `layer` is null or writable.
 enum ygg_status ygg_graph_layer_id(struct ygg_graph *graph, const char *name, uint32_t *layer);
 
-// Removes an empty layer with no DAG edges.
+// Removes a layer with all its nodes (their edges and nestings go with them) and its
+// DAG edges.
 //
 // # Safety
 // `graph` is not used by another thread during the call.
@@ -233,7 +234,8 @@ enum ygg_status ygg_graph_remove_layer_edge(struct ygg_graph *graph,
 // `graph` is not used by another thread during the call.
 enum ygg_status ygg_graph_add_node(struct ygg_graph *graph, uint64_t node, uint32_t layer);
 
-// Removes a node with no children, and its edges, nesting and index.
+// Removes a node, its edges (both directions) and its nesting; its children stay,
+// un-nested.
 //
 // # Safety
 // `graph` is not used by another thread during the call.

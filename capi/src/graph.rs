@@ -157,7 +157,8 @@ pub unsafe extern "C" fn ygg_graph_layer_id(
     })
 }
 
-/// Removes an empty layer with no DAG edges.
+/// Removes a layer with all its nodes (their edges and nestings go with them) and its
+/// DAG edges.
 ///
 /// # Safety
 /// `graph` is not used by another thread during the call.
@@ -216,7 +217,8 @@ pub unsafe extern "C" fn ygg_graph_add_node(
     })
 }
 
-/// Removes a node with no children, and its edges, nesting and index.
+/// Removes a node, its edges (both directions) and its nesting; its children stay,
+/// un-nested.
 ///
 /// # Safety
 /// `graph` is not used by another thread during the call.
