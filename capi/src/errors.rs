@@ -1,4 +1,4 @@
-//! Status codes, the thread-local last error, and [`guard`], the wrapper every entry
+//! Status codes, the thread-local last error, and `guard`, the wrapper every entry
 //! point runs its body in (no panic crosses the boundary).
 
 use std::cell::RefCell;

@@ -9,12 +9,12 @@
 //!
 //! # Rules at the boundary
 //! * Handles are opaque pointers (`ygg_graph`, `ygg_writer`, `ygg_reader`,
-//!   `ygg_snapshot`), each registered while live ([`handle`]): a null, destroyed or
+//!   `ygg_snapshot`), each registered while live (`handle.rs`): a null, destroyed or
 //!   wrongly typed handle is an error (`YGG_STATUS_NULL_ARGUMENT`,
 //!   `YGG_STATUS_INVALID_HANDLE`), never a dereference.
 //! * Every function returns a [`YggStatus`]; `ygg_last_error()` gives the message of the
 //!   last failure on the calling thread. Results go to output pointers.
-//! * No panic crosses the boundary: every entry point runs in [`errors::guard`], which
+//! * No panic crosses the boundary: every entry point runs in `errors::guard`, which
 //!   catches unwinding and reports `YGG_STATUS_PANIC`.
 //! * A refused mutation leaves the graph unchanged (the store's guarantee).
 //! * Each function documents who owns what it returns; each handle module documents its
