@@ -302,6 +302,7 @@ void handle_misuse(ygg_graph* g, ygg_snapshot* s) {
   EXPECT(error_has("not a live writer handle"));
   ygg_graph* dead = nullptr;
   EXPECT_OK(ygg_graph_create(&dead));
+  EXPECT_OK(ygg_graph_node_count(dead, &n));  // this thread's last live handle: the cached check
   EXPECT_OK(ygg_graph_destroy(dead));
   EXPECT_STATUS(ygg_graph_add_node(dead, 1, 0), YGG_STATUS_INVALID_HANDLE);
   EXPECT_STATUS(ygg_graph_destroy(dead), YGG_STATUS_INVALID_HANDLE);  // double destroy
