@@ -72,15 +72,27 @@ typedef enum ygg_feature_kind {
 
 // A scene graph being built: owned by the caller (`ygg_graph_create`,
 // `ygg_graph_import_dsg`), or the live graph of a writer (`ygg_writer_graph`).
+//
+// Thread-safety: not thread-safe. Use a graph from one thread at a time (it may move
+// between threads); a writer's graph counts as part of its writer.
 typedef struct ygg_graph ygg_graph;
 
 // A reader of one scene.
+//
+// Thread-safety: not thread-safe. Use a reader from one thread at a time (it may move
+// between threads); the snapshots it gives are independent handles.
 typedef struct ygg_reader ygg_reader;
 
 // A validated snapshot of a scene.
+//
+// Thread-safety: immutable; any number of threads may query it at once. Destroy it only
+// when no thread uses it (pointers its accessors returned die with it).
 typedef struct ygg_snapshot ygg_snapshot;
 
 // A writer serving one scene.
+//
+// Thread-safety: not thread-safe. Use a writer and its graph from one thread at a time
+// (they may move between threads together).
 typedef struct ygg_writer ygg_writer;
 
 // A list of node ids returned by a query, ascending by id, or ranked (nearest first)

@@ -16,6 +16,9 @@ use ygg_store::{EditResult, FeatureValue, LayerId, NodeId, SceneGraph};
 
 /// A scene graph being built: owned by the caller (`ygg_graph_create`,
 /// `ygg_graph_import_dsg`), or the live graph of a writer (`ygg_writer_graph`).
+///
+/// Thread-safety: not thread-safe. Use a graph from one thread at a time (it may move
+/// between threads); a writer's graph counts as part of its writer.
 pub struct YggGraph {
     slot: GraphSlot,
 }

@@ -14,6 +14,9 @@ use std::time::Duration;
 use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot, WriterStatus};
 
 /// A reader of one scene.
+///
+/// Thread-safety: not thread-safe. Use a reader from one thread at a time (it may move
+/// between threads); the snapshots it gives are independent handles.
 pub struct YggReader {
     reader: SceneReader,
 }

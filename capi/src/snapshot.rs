@@ -18,6 +18,9 @@ use ygg_reader::SceneSnapshot;
 use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, SceneView, SnapshotFile};
 
 /// A validated snapshot of a scene.
+///
+/// Thread-safety: immutable; any number of threads may query it at once. Destroy it only
+/// when no thread uses it (pointers its accessors returned die with it).
 pub struct YggSnapshot {
     source: SnapshotSource,
 }

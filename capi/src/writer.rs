@@ -14,6 +14,9 @@ use ygg_store::{SceneGraph, SceneView};
 use ygg_writer::{SceneWriter, WriterWaitError};
 
 /// A writer serving one scene.
+///
+/// Thread-safety: not thread-safe. Use a writer and its graph from one thread at a time
+/// (they may move between threads together).
 pub struct YggWriter {
     pub(crate) writer: SceneWriter,
     /// The handle `ygg_writer_graph` gave out, destroyed with the writer.
