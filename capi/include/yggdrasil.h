@@ -58,7 +58,7 @@ typedef enum ygg_writer_state {
   YGG_WRITER_STATE_GONE = 2,
 } ygg_writer_state;
 
-// A feature's kind (`YggFeature::kind`).
+// A feature's kind (the `kind` field of `ygg_feature`).
 typedef enum ygg_feature_kind {
   // `str` and `str_len` hold it.
   YGG_FEATURE_KIND_STR = 0,
@@ -729,7 +729,7 @@ enum ygg_status ygg_snapshot_node_label(const struct ygg_snapshot *snapshot,
 
 // A node's feature `key` (`YGG_STATUS_NOT_FOUND` when it has none).
 //
-// Ownership: a string value points into the snapshot (see `YggFeature`).
+// Ownership: a string value points into the snapshot (see `ygg_feature`).
 //
 // # Safety
 // `key` is null or NUL-terminated; `feature` is null or writable.

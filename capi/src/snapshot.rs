@@ -75,7 +75,7 @@ fn node_arg<'v>(
         .ok_or_else(|| FfiError::new(YggStatus::NotFound, format!("no node {id} in the snapshot")))
 }
 
-/// A feature's kind (`YggFeature::kind`).
+/// A feature's kind (the `kind` field of `ygg_feature`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum YggFeatureKind {
@@ -500,7 +500,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_label(
 
 /// A node's feature `key` (`YGG_STATUS_NOT_FOUND` when it has none).
 ///
-/// Ownership: a string value points into the snapshot (see `YggFeature`).
+/// Ownership: a string value points into the snapshot (see `ygg_feature`).
 ///
 /// # Safety
 /// `key` is null or NUL-terminated; `feature` is null or writable.
