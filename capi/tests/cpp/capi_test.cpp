@@ -12,7 +12,9 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <unistd.h>
+#include <vector>
 
 namespace {
 int passed = 0;
@@ -289,6 +291,27 @@ void snapshot_accessors_and_queries(const ygg_snapshot* s) {
   EXPECT(list.len == 0);
 }
 
+/// A snapshot is shared by threads: each runs the queries at once (documented as safe).
+void snapshot_shared_by_threads(const ygg_snapshot* s) {
+  std::vector<int> wrong(4, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([s, t, &wrong] {
+      const float near_lamp[3] = {3.2f, 0.0f, 0.0f};
+      for (int i = 0; i < 200; ++i) {
+        bool found = false;
+        std::uint64_t object = 0;
+        ygg_node_list list{nullptr, nullptr, 0};
+        if (ygg_snapshot_nearest_object(s, near_lamp, &found, &object) != YGG_STATUS_OK || object != 11) ++wrong[t];
+        if (ygg_snapshot_objects_with_label(s, "chair", &list) != YGG_STATUS_OK || !same(list, {10, 20})) ++wrong[t];
+        ygg_node_list_free(&list);
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (int w : wrong) EXPECT(w == 0);
+}
+
 void handle_misuse(ygg_graph* g, ygg_snapshot* s) {
   // Null, destroyed and wrongly typed handles are errors, never dereferenced.
   EXPECT_STATUS(ygg_graph_add_node(nullptr, 1, 0), YGG_STATUS_NULL_ARGUMENT);
@@ -532,6 +555,7 @@ int main(int argc, char** argv) {
   ygg_snapshot* s = nullptr;
   EXPECT_OK(ygg_graph_snapshot(g, &s));
   snapshot_accessors_and_queries(s);
+  snapshot_shared_by_threads(s);
   handle_misuse(g, s);
   files_and_import(g, fixtures, dir);
   EXPECT_OK(ygg_snapshot_destroy(s));
