@@ -119,26 +119,25 @@ inline std::vector<Ranked> take_ranked(ygg_node_list& list) {
   ygg_node_list_free(&list);
   return out;
 }
-/// Runs a list-filling C call; frees the list whatever happens.
-template <typename Call>
-inline std::vector<NodeId> ids(Call call) {
+/// Runs a list-filling C call and converts the list with `take`; frees it whatever
+/// happens.
+template <typename Call, typename Take>
+inline auto run_list(Call call, Take take) {
   ygg_node_list list{nullptr, nullptr, 0};
   ygg_status status = call(&list);
   if (status != YGG_STATUS_OK) {
     ygg_node_list_free(&list);
     check(status);
   }
-  return take_ids(list);
+  return take(list);
+}
+template <typename Call>
+inline std::vector<NodeId> ids(Call call) {
+  return run_list(call, take_ids);
 }
 template <typename Call>
 inline std::vector<Ranked> ranked(Call call) {
-  ygg_node_list list{nullptr, nullptr, 0};
-  ygg_status status = call(&list);
-  if (status != YGG_STATUS_OK) {
-    ygg_node_list_free(&list);
-    check(status);
-  }
-  return take_ranked(list);
+  return run_list(call, take_ranked);
 }
 }  // namespace detail
 

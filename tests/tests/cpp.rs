@@ -52,6 +52,19 @@ fn stop_cpp_writer(mut writer: Proc, scene: &TestScene) {
     scene.assert_no_leftovers(Duration::from_secs(10));
 }
 
+/// Runs a reader process to its clean exit and returns its snapshot lines (those with
+/// `generation=`).
+fn snapshot_lines(command: std::process::Command, label: &str, dog: &Watchdog) -> Vec<String> {
+    let mut reader = Proc::spawn(command, label, dog);
+    let status = reader.wait_exit(STEP);
+    assert!(status.success(), "{}", reader.describe());
+    reader
+        .stdout()
+        .into_iter()
+        .filter(|l| field(l, "generation").is_some())
+        .collect()
+}
+
 /// The room the C++ writer nests a pose at `x` in.
 fn room_at(x: f32) -> NodeId {
     NodeId(if x < 10.0 { 1 } else { 2 })
@@ -149,19 +162,12 @@ fn cpp_writer_is_read_by_a_rust_reader_and_the_ygg_reader_cli() {
 
     // A Rust reader process: the office_reader example prints the newest pose and the
     // object nearest to it.
-    let mut rust_reader = Proc::spawn(
+    let seen = snapshot_lines(
         scene.command_for(&example("office_reader"), &[&scene.name, "3"]),
         "rust reader",
         &dog,
     );
-    let status = rust_reader.wait_exit(STEP);
-    assert!(status.success(), "{}", rust_reader.describe());
-    let seen: Vec<String> = rust_reader
-        .stdout()
-        .into_iter()
-        .filter(|l| field(l, "generation").is_some())
-        .collect();
-    assert_eq!(seen.len(), 3, "{}", rust_reader.describe());
+    assert_eq!(seen.len(), 3, "{seen:?}");
     for line in &seen {
         let nearest: u64 = field(line, "nearest")
             .and_then(|v| v.parse().ok())
@@ -183,19 +189,12 @@ fn cpp_reader_prints_what_the_cpp_writer_publishes() {
     let scene = TestScene::new("cpp-pair");
     let dog = Watchdog::new(WATCHDOG);
     let writer = start_cpp_writer(&scene, &dog);
-    let mut reader = Proc::spawn(
+    let lines = snapshot_lines(
         scene.command_for(&cpp_binary("reader"), &[&scene.name, "5"]),
         "cpp reader",
         &dog,
     );
-    let status = reader.wait_exit(STEP);
-    assert!(status.success(), "{}", reader.describe());
-    let lines: Vec<String> = reader
-        .stdout()
-        .into_iter()
-        .filter(|l| field(l, "generation").is_some())
-        .collect();
-    assert_eq!(lines.len(), 5, "{}", reader.describe());
+    assert_eq!(lines.len(), 5, "{lines:?}");
     for line in &lines {
         let at = field(line, "at").unwrap_or_else(|| panic!("no position in {line:?}"));
         let x: f32 = at
