@@ -1,5 +1,6 @@
 //! `ygg-bench`: the Yggdrasil demo and benchmarks.
 
+mod capi;
 mod demo;
 mod dsg_io;
 mod ipc;
@@ -36,6 +37,9 @@ enum Command {
     /// restart and the writer is restarted twice; fails on a wrong answer or on growth of
     /// memory, descriptors or /dev/shm files.
     Soak(soak::SoakArgs),
+    /// FFI overhead of the C API: the SLAM-style stream published from C++ (through the
+    /// C API) and from Rust, side by side (bench/results/capi.md).
+    Capi(capi::CapiArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -47,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Ipc(args) => ipc::run(&args),
         Command::DsgIo(args) => dsg_io::run(&args),
         Command::Soak(args) => soak::run(&args),
+        Command::Capi(args) => capi::run(&args),
     }
 }
 

@@ -22,6 +22,107 @@ pub struct StepReport {
     pub mesh_points: u32,
 }
 
+/// One mutation of the stream, as [`SlamReplay::step_recorded`] reports it: the stream
+/// can then be replayed elsewhere (through the C API, say) exactly as it was applied.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Edit {
+    /// [`SceneGraph::add_node`].
+    AddNode {
+        /// The new node.
+        node: NodeId,
+        /// Its layer.
+        layer: LayerId,
+    },
+    /// [`SceneGraph::set_geometry`].
+    SetGeometry {
+        /// The node.
+        node: NodeId,
+        /// Its new points.
+        points: Vec<Point>,
+    },
+    /// [`SceneGraph::set_feature`].
+    SetFeature {
+        /// The node.
+        node: NodeId,
+        /// The key.
+        key: &'static str,
+        /// The value.
+        value: FeatureValue,
+    },
+    /// [`SceneGraph::add_label`].
+    AddLabel {
+        /// The node.
+        node: NodeId,
+        /// The label.
+        label: &'static str,
+    },
+    /// [`SceneGraph::add_edge`].
+    AddEdge {
+        /// Source node.
+        source: NodeId,
+        /// Target node.
+        target: NodeId,
+        /// The description.
+        description: &'static str,
+    },
+    /// [`SceneGraph::nest`].
+    Nest {
+        /// The parent.
+        parent: NodeId,
+        /// The child.
+        child: NodeId,
+    },
+}
+
+impl Edit {
+    /// Applies the mutation to `g` (copying the points of a [`Edit::SetGeometry`]).
+    ///
+    /// # Errors
+    /// The mutation's own error; `g` is then unchanged.
+    pub fn apply(&self, g: &mut SceneGraph) -> EditResult {
+        match self {
+            Edit::AddNode { node, layer } => g.add_node(*node, *layer),
+            Edit::SetGeometry { node, points } => g.set_geometry(*node, points.clone()),
+            Edit::SetFeature { node, key, value } => g.set_feature(*node, key, value.clone()),
+            Edit::AddLabel { node, label } => g.add_label(*node, label),
+            Edit::AddEdge {
+                source,
+                target,
+                description,
+            } => g.add_edge(*source, *target, description),
+            Edit::Nest { parent, child } => g.nest(*parent, *child),
+        }
+    }
+
+    /// Applies the mutation to `g`, moving its points.
+    fn apply_owned(self, g: &mut SceneGraph) -> EditResult {
+        match self {
+            Edit::SetGeometry { node, points } => g.set_geometry(node, points),
+            other => other.apply(g),
+        }
+    }
+}
+
+/// Where a step's edits are applied: to the graph alone, or also recorded.
+struct Sink<'a> {
+    graph: &'a mut SceneGraph,
+    log: Option<&'a mut Vec<Edit>>,
+}
+
+impl Sink<'_> {
+    /// Applies `edit` and records it if it succeeded.
+    fn apply(&mut self, edit: Edit) -> EditResult {
+        match self.log.as_deref_mut() {
+            Some(log) => {
+                edit.apply(self.graph)?;
+                log.push(edit);
+                Ok(())
+            }
+            None => edit.apply_owned(self.graph),
+        }
+    }
+}
+
 /// A deterministic SLAM-like update stream over a scene built by
 /// [`crate::layout::build`] (any layout; pieces a scene lacks are skipped).
 pub struct SlamReplay {
@@ -99,10 +200,34 @@ impl SlamReplay {
     /// A refused mutation (which would mean the scene broke the layout's conventions);
     /// the graph is left as the failing mutation found it.
     pub fn step(&mut self, g: &mut SceneGraph) -> EditResult<StepReport> {
+        self.step_into(&mut Sink {
+            graph: g,
+            log: None,
+        })
+    }
+
+    /// [`SlamReplay::step`] that also appends each mutation it applied to `log`, in
+    /// order, so the same stream can be applied to another graph (or through another
+    /// API) with [`Edit::apply`].
+    ///
+    /// # Errors
+    /// As [`SlamReplay::step`]; `log` then holds the mutations applied before the error.
+    pub fn step_recorded(
+        &mut self,
+        g: &mut SceneGraph,
+        log: &mut Vec<Edit>,
+    ) -> EditResult<StepReport> {
+        self.step_into(&mut Sink {
+            graph: g,
+            log: Some(log),
+        })
+    }
+
+    fn step_into(&mut self, s: &mut Sink<'_>) -> EditResult<StepReport> {
         self.tick += 1;
         let mut report = StepReport::default();
         if let Some(agents) = self.agents {
-            self.append_pose(g, agents)?;
+            self.append_pose(s, agents)?;
             report.poses = 1;
         }
         if self.tick.is_multiple_of(MOVE_EVERY) && !self.objects.is_empty() {
@@ -112,30 +237,35 @@ impl SlamReplay {
                 self.rng.gen_range(-0.02..0.02),
                 0.0,
             ];
-            for m in children(&*g, o) {
-                let moved: Vec<Point> = g
+            for m in children(&*s.graph, o) {
+                let moved: Vec<Point> = s
+                    .graph
                     .node(m)
                     .map(|n| {
-                        g.points(n)
+                        s.graph
+                            .points(n)
                             .iter()
                             .map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
                             .collect()
                     })
                     .unwrap_or_default();
-                g.set_geometry(m, moved)?;
+                s.apply(Edit::SetGeometry {
+                    node: m,
+                    points: moved,
+                })?;
             }
             report.objects_moved = 1;
         }
         if self.tick.is_multiple_of(MESH_EVERY) {
-            report.mesh_points = self.grow_mesh(g)?;
+            report.mesh_points = self.grow_mesh(s)?;
         }
         if self.tick.is_multiple_of(NEW_OBJECT_EVERY) {
-            report.objects_added = self.add_object(g)?;
+            report.objects_added = self.add_object(s)?;
         }
         Ok(report)
     }
 
-    fn append_pose(&mut self, g: &mut SceneGraph, agents: LayerId) -> EditResult {
+    fn append_pose(&mut self, s: &mut Sink<'_>, agents: LayerId) -> EditResult {
         let to = [
             self.waypoint[0] - self.position[0],
             self.waypoint[1] - self.position[1],
@@ -161,22 +291,35 @@ impl SlamReplay {
         }
         let id = NodeId(NodeSymbol::new(b'a', self.next_pose).0);
         self.next_pose += 1;
-        g.add_node(id, agents)?;
-        g.set_geometry(id, vec![self.position])?;
-        g.set_feature(
-            id,
-            "timestamp_ns",
-            FeatureValue::Int((self.tick * 33_333_333) as i64),
-        )?;
-        if let Some(prev) = self.last_pose.filter(|p| g.node(*p).is_some()) {
-            g.add_edge(prev, id, "odometry")?;
+        s.apply(Edit::AddNode {
+            node: id,
+            layer: agents,
+        })?;
+        s.apply(Edit::SetGeometry {
+            node: id,
+            points: vec![self.position],
+        })?;
+        s.apply(Edit::SetFeature {
+            node: id,
+            key: "timestamp_ns",
+            value: FeatureValue::Int((self.tick * 33_333_333) as i64),
+        })?;
+        if let Some(prev) = self.last_pose.filter(|p| s.graph.node(*p).is_some()) {
+            s.apply(Edit::AddEdge {
+                source: prev,
+                target: id,
+                description: "odometry",
+            })?;
         }
         if let Some(places) = self.places {
-            let near =
-                nearest_nodes(&*g, Scope::Layer(places), self.position, 1).unwrap_or_default();
+            let near = nearest_nodes(&*s.graph, Scope::Layer(places), self.position, 1)
+                .unwrap_or_default();
             if let Some(&(place, _)) = near.first() {
                 // Nesting needs a places -> agents layer edge; scenes without one skip it.
-                let _ = g.nest(place, id);
+                let _ = s.apply(Edit::Nest {
+                    parent: place,
+                    child: id,
+                });
             }
         }
         self.last_pose = Some(id);
@@ -184,11 +327,12 @@ impl SlamReplay {
     }
 
     /// Appends a patch of mesh points to one room's unclaimed mesh (rooms in turn).
-    fn grow_mesh(&mut self, g: &mut SceneGraph) -> EditResult<u32> {
+    fn grow_mesh(&mut self, s: &mut Sink<'_>) -> EditResult<u32> {
         if self.rooms.is_empty() {
             return Ok(0);
         }
         let (room, b) = self.rooms[(self.tick / MESH_EVERY) as usize % self.rooms.len()];
+        let g = &*s.graph;
         let target = layout::layer_with_role(g, LayerRole::UnclaimedMesh { room })
             .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
         let Some(target) = target else { return Ok(0) };
@@ -204,16 +348,20 @@ impl SlamReplay {
                 self.rng.gen_range(0.0..3.0),
             ]);
         }
-        g.set_geometry(target, points)?;
+        s.apply(Edit::SetGeometry {
+            node: target,
+            points,
+        })?;
         Ok(n)
     }
 
     /// Adds an object with a small mesh in a random room (per-room layouts only).
-    fn add_object(&mut self, g: &mut SceneGraph) -> EditResult<u32> {
+    fn add_object(&mut self, s: &mut Sink<'_>) -> EditResult<u32> {
         if self.rooms.is_empty() {
             return Ok(0);
         }
         let (room, b) = self.rooms[self.rng.gen_range(0..self.rooms.len())];
+        let g = &*s.graph;
         let (Some(objects), Some(mesh)) = (
             layout::layer_with_role(g, LayerRole::ClaimedObjects { room }),
             layout::layer_with_role(g, LayerRole::ClaimedMesh { room }),
@@ -235,15 +383,76 @@ impl SlamReplay {
             .map(|_| [0, 1, 2].map(|a| centre[a] + self.rng.gen_range(-0.15f32..0.15)))
             .collect();
         let label = ["chair", "plant", "box", "person"][self.rng.gen_range(0..4)];
-        g.add_node(object, objects)?;
-        g.add_label(object, label)?;
-        g.nest(claimed, object)?;
-        g.add_node(mesh_node, mesh)?;
-        g.set_geometry(mesh_node, points)?;
-        g.nest(object, mesh_node)?;
-        if query::parent(&*g, object).is_some() {
+        for edit in [
+            Edit::AddNode {
+                node: object,
+                layer: objects,
+            },
+            Edit::AddLabel {
+                node: object,
+                label,
+            },
+            Edit::Nest {
+                parent: claimed,
+                child: object,
+            },
+            Edit::AddNode {
+                node: mesh_node,
+                layer: mesh,
+            },
+            Edit::SetGeometry {
+                node: mesh_node,
+                points,
+            },
+            Edit::Nest {
+                parent: object,
+                child: mesh_node,
+            },
+        ] {
+            s.apply(edit)?;
+        }
+        if query::parent(&*s.graph, object).is_some() {
             self.objects.push(object);
         }
         Ok(1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::Layout;
+    use crate::office::{self, OfficeParams};
+
+    #[test]
+    fn a_recorded_stream_applied_to_a_copy_gives_the_same_graph() {
+        let office = office::generate(OfficeParams {
+            seed: 7,
+            scale: 0.02,
+        });
+        let mut live = layout::build(&office, Layout::Mint).expect("layout");
+        let mut copy = live.clone();
+        let mut replay = SlamReplay::new(&live, 3);
+        let mut log = Vec::new();
+        for _ in 0..320 {
+            replay.step_recorded(&mut live, &mut log).expect("step");
+        }
+        assert!(
+            log.iter().any(|e| matches!(e, Edit::AddLabel { .. })),
+            "no object added"
+        );
+        for edit in &log {
+            edit.apply(&mut copy).expect("replayed edit");
+        }
+        assert_eq!(copy.node_count(), live.node_count());
+        for layer in live.layers() {
+            for n in live.layer_nodes(layer) {
+                let id = live.node_id(n);
+                let m = copy.node(id).expect("node in the copy");
+                assert_eq!(copy.points(m), live.points(n), "points of {id}");
+                assert_eq!(copy.parent(m), live.parent(n), "parent of {id}");
+                assert_eq!(copy.aabb(m), live.aabb(n), "box of {id}");
+            }
+        }
     }
 }
