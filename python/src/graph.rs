@@ -26,8 +26,8 @@ pub fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 
 /// Where a Python `SceneGraph`'s graph lives.
 pub enum GraphHome {
-    /// In the Python object.
-    Owned(SceneGraph),
+    /// In the Python object (boxed: a graph is large, a writer handle small).
+    Owned(Box<SceneGraph>),
     /// In a writer, which publishes it.
     Published(SharedWriter),
 }
@@ -46,7 +46,7 @@ impl PySceneGraph {
     /// A Python graph owning `graph`.
     pub fn from_graph(graph: SceneGraph) -> Self {
         PySceneGraph {
-            home: Mutex::new(GraphHome::Owned(graph)),
+            home: Mutex::new(GraphHome::Owned(Box::new(graph))),
         }
     }
 

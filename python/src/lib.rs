@@ -4,13 +4,13 @@
 //! part of the package (`python/yggdrasil/`) re-exports it and adds the spark_dsg-style
 //! facade `yggdrasil.dsg` and the benchmark `yggdrasil.bench`.
 //!
-//! * [`scene::Scene`]: a validated snapshot (`open(path)`, `Reader.wait_next()`,
+//! * `scene::Scene`: a validated snapshot (`open(path)`, `Reader.wait_next()`,
 //!   `SceneGraph.snapshot()`), with every query of `ygg_store::query`.
-//! * [`objects::ObjectQueries`]: the object contract of `ygg-reader query`
+//! * `objects::ObjectQueries`: the object contract of `ygg-reader query`
 //!   (`ygg_dsg::objects`), singly and in batches.
-//! * [`graph::PySceneGraph`] and [`writer::Writer`]: building and publishing a graph.
-//! * [`reader::Reader`]: following a live scene.
-//! * [`errors`]: the exception hierarchy.
+//! * `graph::PySceneGraph` and `writer::Writer`: building and publishing a graph.
+//! * `reader::Reader`: following a live scene.
+//! * `errors`: the exception hierarchy.
 //!
 //! Bindings call the Rust queries; no query is implemented here. Queries on a snapshot
 //! hold the GIL only for short, non-blocking work; waits and batch queries release it.

@@ -19,6 +19,9 @@ use crate::snapshot::{ObjectCatalog, SnapshotSource, SnapshotView};
 /// The id reported by batch queries for "no node" (`2**64 - 1`, an id no node may have).
 pub const NO_NODE: u64 = u64::MAX;
 
+/// `nearest_nodes_many`'s answer: ids (`uint64`) and distances (`float32`).
+type NearestArrays<'py> = (Bound<'py, PyArray1<u64>>, Bound<'py, PyArray1<f32>>);
+
 /// An edge as Python sees it: `(source, target, description)`.
 type EdgeTuple = (u64, u64, String);
 
@@ -359,7 +362,7 @@ impl Scene {
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
         layer: Option<&str>,
-    ) -> PyResult<(Bound<'py, PyArray1<u64>>, Bound<'py, PyArray1<f32>>)> {
+    ) -> PyResult<NearestArrays<'py>> {
         let queries = self::points(points, "points")?;
         let scope = scope(self.snapshot.view(), layer)?;
         let snapshot = Arc::clone(&self.snapshot);

@@ -40,7 +40,7 @@ impl Writer {
         let owned = {
             let mut home = graph.get().home();
             match &mut *home {
-                GraphHome::Owned(g) => std::mem::take(g),
+                GraphHome::Owned(g) => std::mem::take(&mut **g),
                 GraphHome::Published(_) => {
                     return Err(MutationError::new_err(
                         "this SceneGraph is already published by a Writer; close it first",
@@ -56,13 +56,13 @@ impl Writer {
         let mut writer = match created {
             Ok(w) => w,
             Err(e) => {
-                *graph.get().home() = GraphHome::Owned(owned);
+                *graph.get().home() = GraphHome::Owned(Box::new(owned));
                 return Err(transport_error(&e));
             }
         };
         drop(owned);
         if let Err(e) = py.detach(|| writer.publish()) {
-            *graph.get().home() = GraphHome::Owned(writer.graph().clone());
+            *graph.get().home() = GraphHome::Owned(Box::new(writer.graph().clone()));
             return Err(transport_error(&e));
         }
         let shared: SharedWriter = Arc::new(Mutex::new(Some(writer)));
@@ -125,7 +125,7 @@ impl Writer {
         };
         let graph = writer.graph().clone();
         py.detach(|| drop(writer));
-        *self.graph.get().home() = GraphHome::Owned(graph);
+        *self.graph.get().home() = GraphHome::Owned(Box::new(graph));
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
