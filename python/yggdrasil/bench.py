@@ -264,7 +264,7 @@ def main(argv=None):
         time_path(path, qs, 1)  # warm-up: lazily built catalogs, caches
         t0 = time.perf_counter()
         a, s = time_path(path, qs, args.reps)
-        log(f"{path.name}: {len(qs)} queries in {time.perf_counter() - t0:.1f} s")
+        log(f"{path.name}: {len(qs)} queries x {args.reps} in {time.perf_counter() - t0:.2f} s")
         answers[path.name] = a
         rows[path.name] = {f: median_us(ns) for f, ns in s.items()}
     differ = [i for i, a in answers["yggdrasil"].items() if a != answers[anchor.KdPath.name][i]]
@@ -406,6 +406,30 @@ def write_report(out, info, rows, differ, n_queries, reps, batch, n_batch, first
         lines.append("")
         lines.append(f"Ratio spark-dsg-rebuild / yggdrasil across processes: {rebuild / ygg_total:.1f}×; "
                      f"spark-dsg-rebuild / yggdrasil's query on the new snapshot: {rebuild / ygg_query:.0f}×.")
+    q1a = rows["yggdrasil"]["Q1a"]
+    q1a_spark = min(rows[n]["Q1a"] for n in names[1:])
+    labels = {f: rows["yggdrasil"][f] for f in fams if f.startswith("Q3")}
+    open_ms = statistics.median(first["yggdrasil: open .ygg + first Q1a"]) / 1e6
+    attach_ms = statistics.median(first["yggdrasil: attach to live scene + first Q1a"]) / 1e6
+
+    def verdict(ok):
+        return "met" if ok else "**missed**"
+
+    lines += [
+        "",
+        "## Targets (issue 18), this run",
+        "",
+        f"- nearest_object per call >= 10x the fastest spark_dsg path (aim <= 3 µs): {q1a:.3g} µs against "
+        f"{q1a_spark:.3g} µs, {q1a_spark / q1a:.1f}x: {verdict(q1a_spark / q1a >= 10)}.",
+        "- label query <= 1 µs: " + ", ".join(f"{f} {v:.3g} µs ({verdict(v <= 1)})" for f, v in labels.items()) + ".",
+        f"- batch nearest >= 1 M queries/s: {batch['yggdrasil'] / 1e6:.2f} M/s: {verdict(batch['yggdrasil'] >= 1e6)}.",
+        f"- open .ygg to first answer <= 20 ms: {open_ms:.2f} ms: {verdict(open_ms <= 20)}.",
+        f"- attach to a live scene to first answer (report): {attach_ms:.0f} ms.",
+    ]
+    if rebuild:
+        lines.append(f"- query after a move across processes >= 1000x spark_dsg's rebuild path: end to end (mutation in "
+                     f"the writer to answer here) {rebuild / ygg_total:.1f}x: {verdict(rebuild / ygg_total >= 1000)}; "
+                     f"the query on the new snapshot alone {rebuild / ygg_query:.0f}x: {verdict(rebuild / ygg_query >= 1000)}.")
     pathlib.Path(out).parent.mkdir(parents=True, exist_ok=True)
     pathlib.Path(out).write_text("\n".join(lines) + "\n")
 
