@@ -3,7 +3,7 @@
 
 use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyFloat, PyInt, PyString};
+use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
 use ygg_store::query::Direction;
 use ygg_store::{FeatureRef, FeatureValue, Point, SceneView, Scope};
 
@@ -11,6 +11,20 @@ use crate::errors::{QueryError, unknown_layer};
 
 /// A point from any sequence of three numbers (list, tuple, numpy array), as `f32`.
 pub fn point(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Point> {
+    // The common case, a list or tuple of three floats, read item by item (about half the
+    // cost of the generic sequence extraction on a call that takes well under a microsecond).
+    let items = if let Ok(list) = obj.cast::<PyList>() {
+        (list.len() == 3).then(|| [list.get_item(0), list.get_item(1), list.get_item(2)])
+    } else if let Ok(tuple) = obj.cast::<PyTuple>() {
+        (tuple.len() == 3).then(|| [tuple.get_item(0), tuple.get_item(1), tuple.get_item(2)])
+    } else {
+        None
+    };
+    if let Some([Ok(x), Ok(y), Ok(z)]) = items
+        && let (Ok(x), Ok(y), Ok(z)) = (x.extract::<f64>(), y.extract::<f64>(), z.extract::<f64>())
+    {
+        return Ok([x as f32, y as f32, z as f32]);
+    }
     let xyz: [f64; 3] = obj.extract().map_err(|_| {
         QueryError::new_err(format!(
             "{what}: expected a sequence of 3 numbers, got {}",
