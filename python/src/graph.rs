@@ -275,10 +275,8 @@ impl PySceneGraph {
 
     /// Writes the graph to a `.ygg` snapshot file (atomically: a reader of the old file
     /// keeps its bytes). Raises `FileError` naming the path.
-    fn save(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
-        let bytes = self.with(|g| g.save(&path))?;
-        let _ = py;
-        bytes.map_err(|e| file_error(&e))
+    fn save(&self, path: std::path::PathBuf) -> PyResult<()> {
+        self.with(|g| g.save(&path))?.map_err(|e| file_error(&e))
     }
 
     /// An archived, validated snapshot of the graph as it is now, queried like a file.

@@ -48,6 +48,8 @@ impl Writer {
                 }
             }
         };
+        // The writer takes a clone: a failed create returns no graph, and the Python
+        // graph must stay as it was when construction fails.
         let created = py.detach(|| {
             SceneWriter::builder(scene_name)
                 .max_readers(max_readers)
