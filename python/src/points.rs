@@ -1,0 +1,39 @@
+//! Zero-copy numpy views of a node's points.
+
+#![allow(
+    unsafe_code,
+    reason = "a numpy array borrowing the snapshot's bytes, owned by the Scene object"
+)]
+
+use numpy::ndarray::ArrayView2;
+use numpy::{PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use ygg_store::{NodeId, SceneView};
+
+use crate::errors::unknown_node;
+use crate::scene::Scene;
+
+/// A read-only `(n, 3)` `float32` array over node `id`'s points in `scene`'s snapshot,
+/// whose numpy base is the `Scene` object: the snapshot stays mapped while it lives.
+pub fn points_array<'py>(
+    scene: &Bound<'py, Scene>,
+    id: NodeId,
+) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    let view = scene.get().snapshot().view();
+    let node = view.node(id).ok_or_else(|| unknown_node(id.0))?;
+    let points = view.points(node);
+    let flat: &[f32] = points.as_flattened();
+    let array = ArrayView2::from_shape((points.len(), 3), flat)
+        .expect("a slice of [f32; 3] has exactly 3 columns");
+    // SAFETY: `borrow_from_array` requires that the memory behind `array` stays valid and
+    // is never reallocated until `container` (the numpy base) is dropped. The slice lies in
+    // the bytes of the snapshot that `scene` holds through an `Arc<SnapshotView>`: a
+    // mapped `.ygg` file, an aligned in-memory archive, or shared-memory samples held by a
+    // `SceneSnapshot`. `Scene` is frozen and never replaces its snapshot, and none of these
+    // backings is written or moved while held. The container is `scene` itself, so the
+    // array keeps the snapshot alive.
+    let out = unsafe { PyArray2::borrow_from_array(&array, scene.clone().into_any()) };
+    // The snapshot is read-only (shared memory is mapped read-only in readers).
+    out.readwrite().make_nonwriteable();
+    Ok(out)
+}

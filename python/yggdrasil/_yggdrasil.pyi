@@ -1,0 +1,288 @@
+"""Type stubs of the extension module ``yggdrasil._yggdrasil`` (PyO3)."""
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+_Point = Union[Sequence[float], npt.NDArray[Any]]
+_Points = Union[Sequence[Sequence[float]], npt.NDArray[Any]]
+_Path = Union[str, os.PathLike[str]]
+_LayerArg = Union[str, int]
+_FeatureValue = Union[str, int, float, bool]
+_Edge = Tuple[int, int, str]
+_Box = Tuple[Tuple[float, float, float], Tuple[float, float, float]]
+_Ragged = Tuple[npt.NDArray[np.int64], npt.NDArray[np.uint64]]
+
+NO_NODE: int
+"""The id batch queries report for "no node" (2**64 - 1)."""
+
+class Error(Exception):
+    """Base class of every Yggdrasil error."""
+
+class FileError(Error):
+    """A file could not be read, is not what it claims, or failed validation."""
+
+class QueryError(Error):
+    """A query was given bad input (non-finite point, negative radius, unknown node or layer, malformed query)."""
+
+class MutationError(Error):
+    """The graph refused a mutation; it is left unchanged."""
+
+class TransportError(Error):
+    """Shared memory failed: no writer, a rejected snapshot, a full /dev/shm, ..."""
+
+class WriterGoneError(TransportError):
+    """The scene's writer exited or died; the last snapshot stays usable."""
+
+def open(path: _Path) -> Scene:
+    """Maps a ``.ygg`` snapshot file and validates it once; raises ``FileError``."""
+
+def write_office(path: _Path, seed: int = 7, scale: float = 1.0) -> None:
+    """Writes the built-in office as a Spark-DSG file (binary for ``.sparkdsg``, else JSON)."""
+
+def office_graph(layout: str = "mint", seed: int = 7, scale: float = 1.0) -> SceneGraph:
+    """The built-in office in one of the paper's layouts."""
+
+class Scene:
+    """A validated snapshot, queried in place (from ``open``, ``Reader`` or ``SceneGraph.snapshot``)."""
+
+    @property
+    def generation(self) -> int:
+        """The snapshot generation (0 for a file)."""
+    @property
+    def layers(self) -> List[str]:
+        """Every layer's name, ascending by layer id."""
+    @property
+    def node_count(self) -> int:
+        """Total number of nodes."""
+    @property
+    def objects(self) -> ObjectQueries:
+        """The object contract of ``ygg-reader query`` over the whole scene."""
+    def layer(self, name: str) -> Layer:
+        """The layer called ``name``; raises ``QueryError``."""
+    def has_node(self, id: int) -> bool:
+        """Whether the node exists."""
+    def node(self, id: int) -> Node:
+        """The node; raises ``QueryError`` if absent."""
+    def objects_in(self, root: int) -> ObjectQueries:
+        """The object queries restricted to ``root``'s sub-tree."""
+    def query(self, q: Union[Mapping[str, Any], str]) -> Dict[str, List[int]]:
+        """One query of the ``ygg-reader query`` contract: ``{"ids": [...]}``; raises ``QueryError``."""
+    def nearest_nodes(self, point: _Point, m: int = 1, layer: Optional[str] = None) -> List[Tuple[int, float]]:
+        """At most ``m`` ``(id, distance)`` pairs, nearest first."""
+    def nodes_within_radius(self, point: _Point, radius: float, layer: Optional[str] = None) -> List[int]:
+        """Nodes with a point at distance ``<= radius``, ascending."""
+    def nearest_in_subtree(self, root: int, point: _Point, m: int = 1) -> List[Tuple[int, float]]:
+        """Like ``nearest_nodes`` within ``root``'s sub-tree."""
+    def visible(self, root: int, eye: _Point, dir: _Point, half_angle: float, range: float) -> List[int]:
+        """Nodes in ``root``'s sub-tree with a point in the cone (half-angle in radians)."""
+    def nodes_with_label(self, label: str, layer: Optional[str] = None) -> List[int]:
+        """Nodes carrying ``label``, ascending."""
+    def nodes_matching(self, features: Mapping[str, _FeatureValue], layer: Optional[str] = None) -> List[int]:
+        """Nodes matching every ``key: value``, ascending."""
+    def nodes_having(self, keys: Sequence[str], layer: Optional[str] = None) -> List[int]:
+        """Nodes carrying every key, ascending."""
+    def edges_from(self, node: int) -> List[_Edge]:
+        """Edges leaving ``node``."""
+    def edges_to(self, node: int) -> List[_Edge]:
+        """Edges entering ``node``."""
+    def edges_matching(self, description: str, layer: Optional[str] = None) -> List[_Edge]:
+        """Edges with this description."""
+    def parent(self, node: int) -> Optional[int]:
+        """The parent, or ``None``."""
+    def children(self, node: int) -> List[int]:
+        """The children, ascending."""
+    def subtree(self, root: int) -> List[int]:
+        """``root`` and everything nested below it, ascending."""
+    def subgraph(self, nodes: Sequence[int]) -> SceneGraph:
+        """The sub-scene graph over ``nodes`` (every layer kept)."""
+    def bfs(self, start: int, direction: str = "out") -> List[int]:
+        """Breadth-first order over ``start``'s layer edges (``"out"`` or ``"both"``)."""
+    def dfs(self, start: int, direction: str = "out") -> List[int]:
+        """Depth-first pre-order (as ``bfs``)."""
+    def shortest_path(self, source: int, target: int, direction: str = "out") -> Optional[List[int]]:
+        """Fewest-edges path, both ends included, or ``None``."""
+    def nearest_nodes_many(
+        self, points: _Points, layer: Optional[str] = None
+    ) -> Tuple[npt.NDArray[np.uint64], npt.NDArray[np.float32]]:
+        """``nearest_nodes(p, 1)`` per row, without the GIL: ``(ids, distances)``."""
+
+class Node:
+    """One node of a ``Scene``."""
+
+    @property
+    def id(self) -> int:
+        """The node id."""
+    @property
+    def layer(self) -> str:
+        """The layer's name."""
+    @property
+    def parent(self) -> Optional[int]:
+        """The parent's id."""
+    @property
+    def children(self) -> List[int]:
+        """The children's ids, ascending."""
+    @property
+    def labels(self) -> List[str]:
+        """The labels, sorted."""
+    @property
+    def features(self) -> Dict[str, _FeatureValue]:
+        """The features, as a new dict."""
+    @property
+    def aabb(self) -> Optional[_Box]:
+        """The kept bounding box ``((min), (max))``, or ``None``."""
+    @property
+    def points(self) -> npt.NDArray[np.float32]:
+        """Read-only ``(n, 3)`` float32 view of the mapped snapshot (no copy); keeps it alive."""
+
+class Layer:
+    """One layer of a ``Scene``."""
+
+    @property
+    def id(self) -> int:
+        """The layer id."""
+    @property
+    def name(self) -> str:
+        """The layer name."""
+    @property
+    def generation(self) -> int:
+        """The layer's generation."""
+    @property
+    def nodes(self) -> List[int]:
+        """Node ids, ascending."""
+    @property
+    def children(self) -> List[str]:
+        """Names of the layers it encompasses."""
+    @property
+    def parents(self) -> List[str]:
+        """Names of the layers encompassing it."""
+    def __len__(self) -> int: ...
+
+class ObjectQueries:
+    """The object contract of ``ygg-reader query``: Spark-DSG object ids, ascending."""
+
+    def nearest(self, point: _Point) -> List[int]:
+        """The object with the closest vertex (at most one id)."""
+    def within(self, point: _Point, radius: float) -> List[int]:
+        """Objects with a vertex at distance ``<= radius``."""
+    def visible(self, eye: _Point, dir: _Point, half_angle_deg: float, range: float) -> List[int]:
+        """Objects with a vertex in the view cone."""
+    def with_label(self, label: str) -> List[int]:
+        """Objects carrying ``label``."""
+    def ids(self) -> List[int]:
+        """Every object node of the catalog."""
+    def nearest_many(self, points: _Points) -> npt.NDArray[np.uint64]:
+        """``nearest`` per row, without the GIL (``NO_NODE`` for none)."""
+    def within_many(self, points: _Points, radius: float) -> _Ragged:
+        """``within`` per row, without the GIL: ``(offsets, ids)``."""
+    def visible_many(self, eyes: _Points, dirs: _Points, half_angle_deg: float, range: float) -> _Ragged:
+        """``visible`` per row, without the GIL: ``(offsets, ids)``."""
+
+class SceneGraph:
+    """An editable scene graph; a refused mutation raises ``MutationError`` and changes nothing."""
+
+    def __init__(self) -> None: ...
+    @staticmethod
+    def import_spark_dsg(path: _Path, layout: str = "mint", lenient: bool = False) -> SceneGraph:
+        """Imports a Spark-DSG file in one of the paper's layouts; raises ``FileError``."""
+    def add_layer(self, name: str) -> int:
+        """Adds a layer; returns its id."""
+    def layer_id(self, name: str) -> int:
+        """The id of the layer called ``name``."""
+    def remove_layer(self, layer: _LayerArg) -> None:
+        """Removes an empty layer."""
+    def add_layer_edge(self, parent: _LayerArg, child: _LayerArg) -> None:
+        """Adds the DAG edge ``parent -> child``."""
+    def remove_layer_edge(self, parent: _LayerArg, child: _LayerArg) -> None:
+        """Removes a DAG edge no nesting uses."""
+    def add_node(self, id: int, layer: _LayerArg) -> None:
+        """Adds a node."""
+    def remove_node(self, id: int) -> None:
+        """Removes a node with its edges and nestings."""
+    def set_geometry(self, id: int, points: _Points) -> None:
+        """Replaces a node's points."""
+    def set_feature(self, id: int, key: str, value: _FeatureValue) -> None:
+        """Sets a feature."""
+    def remove_feature(self, id: int, key: str) -> None:
+        """Removes a feature."""
+    def add_label(self, id: int, label: str) -> None:
+        """Adds a label."""
+    def remove_label(self, id: int, label: str) -> None:
+        """Removes a label."""
+    def add_edge(self, source: int, target: int, description: str = "") -> None:
+        """Adds an intra-layer edge."""
+    def remove_edge(self, source: int, target: int) -> None:
+        """Removes an edge."""
+    def nest(self, parent: int, child: int) -> None:
+        """Nests ``child`` under ``parent``."""
+    def unnest(self, child: int) -> None:
+        """Removes ``child``'s nesting."""
+    def enable_bounding_box(self, id: int) -> None:
+        """Keeps an exact box of the node's sub-tree."""
+    def disable_bounding_box(self, id: int) -> None:
+        """Stops keeping the box."""
+    def enable_layer_index(self, layer: _LayerArg) -> None:
+        """Keeps a kd-tree over the layer's points."""
+    def disable_layer_index(self, layer: _LayerArg) -> None:
+        """Drops the layer's kd-tree."""
+    def enable_node_index(self, id: int) -> None:
+        """Keeps a kd-tree over the node's sub-tree."""
+    def disable_node_index(self, id: int) -> None:
+        """Drops the node's kd-tree."""
+    def has_node(self, id: int) -> bool:
+        """Whether the node exists."""
+    @property
+    def node_count(self) -> int:
+        """Total number of nodes."""
+    @property
+    def layers(self) -> List[str]:
+        """Every layer's name."""
+    def save(self, path: _Path) -> None:
+        """Writes a ``.ygg`` file atomically; raises ``FileError``."""
+    def snapshot(self) -> Scene:
+        """An archived snapshot of the graph as it is now."""
+
+class Reader:
+    """Follows a live scene; waits release the GIL."""
+
+    def __init__(self, scene_name: str, wait_for_writer: float = 0.0, copy_segments: bool = False) -> None: ...
+    def wait_next(self, timeout: float = 1.0) -> Optional[Scene]:
+        """The next snapshot, or ``None`` after ``timeout`` seconds; raises ``WriterGoneError``."""
+    def latest(self) -> Optional[Scene]:
+        """The newest snapshot without blocking."""
+    @property
+    def writer_status(self) -> str:
+        """``"unknown"``, ``"alive"`` or ``"gone"``."""
+    @property
+    def scene_name(self) -> str:
+        """The scene name."""
+    @property
+    def validations(self) -> int:
+        """Layer segments validated so far."""
+    def close(self) -> None:
+        """Detaches."""
+    def __enter__(self) -> Reader: ...
+    def __exit__(self, *args: object) -> None: ...
+
+class Writer:
+    """Publishes a ``SceneGraph``; its later mutations go to the writer."""
+
+    def __init__(self, scene_name: str, graph: SceneGraph, max_readers: int = 8) -> None: ...
+    def publish(self) -> Dict[str, int]:
+        """Sends the changed layers and a manifest."""
+    @property
+    def generation(self) -> int:
+        """The last generation published."""
+    @property
+    def graph(self) -> SceneGraph:
+        """The graph being published."""
+    @property
+    def scene_name(self) -> str:
+        """The scene name."""
+    def close(self) -> None:
+        """Stops publishing and removes the shared memory."""
+    def __enter__(self) -> Writer: ...
+    def __exit__(self, *args: object) -> None: ...
