@@ -5,7 +5,9 @@
 //! glibc keeps such freed memory in the thread's arena, so a writer that outlives hundreds of
 //! killed readers grew its RSS by ~15 kB per kill while its heap in use stayed flat
 //! (heaptrack: the same 44.9 MB peak with and without 150 kills; `bench/results/soak.md`).
-//! `malloc_trim` returns those free pages; it runs only after a dead node was removed.
+//! Clean departures free less, but the same way.
+//! `malloc_trim` returns those free pages; it runs only after a reader left or died (the
+//! helper thread checks once a second).
 #![cfg_attr(
     target_env = "gnu",
     expect(

@@ -21,6 +21,7 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, EventId, Node, NodeState};
+use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
@@ -196,7 +197,7 @@ struct PortSettings {
 struct SegmentService {
     name: String,
     publisher: SegmentPort,
-    _service: SegmentFactory,
+    service: SegmentFactory,
 }
 
 /// State shared with the helper thread.
@@ -214,6 +215,13 @@ impl Inner {
             // A failing connection is retried on the next publish; nothing to report here.
             let _ = service.publisher.update_connections();
         }
+    }
+
+    /// Readers connected to the scene now (the manifest's subscribers).
+    fn reader_count(&self) -> usize {
+        self.ports
+            .get(&MANIFEST_LAYER_ID)
+            .map_or(0, |s| s.service.dynamic_config().number_of_subscribers())
     }
 
     fn notify(&self, event: EventId) {
@@ -566,7 +574,7 @@ fn open_segment_port(
     Ok(SegmentService {
         name: name.to_owned(),
         publisher,
-        _service: service,
+        service,
     })
 }
 
@@ -610,6 +618,7 @@ fn helper_loop(
     config: &Config,
 ) {
     let mut last_cleanup = Instant::now();
+    let mut readers_before = lock(inner).reader_count();
     while !stop.load(Ordering::SeqCst) {
         let mut hello = false;
         let waited = listener.timed_wait(
@@ -629,33 +638,36 @@ fn helper_loop(
             inner.notify(EVENT_SNAPSHOT_PUBLISHED);
         }
         if last_cleanup.elapsed() >= CLEANUP_INTERVAL {
-            let removed = cleanup_dead_nodes(config);
+            cleanup_dead_nodes(config);
             // Drops the connections (shared-memory files and descriptors) of readers that
             // left or died; a layer that is not republished would otherwise keep them
             // until the next reader announces itself.
-            lock(inner).update_connections();
-            if removed > 0 {
+            let readers = {
+                let inner = lock(inner);
+                inner.update_connections();
+                inner.reader_count()
+            };
+            // A reader left or died (and whoever noticed first, a reader or this thread,
+            // removed its resources): give the heap that freed back.
+            if readers < readers_before {
                 super::heap::release_free_heap();
             }
+            readers_before = readers;
             last_cleanup = Instant::now();
         }
     }
 }
 
 /// Removes the resources of dead processes (readers killed without cleanup), freeing their
-/// subscriber slots and the samples they held. Returns how many dead nodes this call removed.
-fn cleanup_dead_nodes(config: &Config) -> usize {
-    let mut removed = 0;
+/// subscriber slots and the samples they held.
+fn cleanup_dead_nodes(config: &Config) {
     let _ = Node::<Ipc>::list(config, |state| {
-        // Another process may be cleaning up the same node; then this one fails, harmlessly.
-        if let NodeState::Dead(view) = state
-            && view.try_remove_stale_resources().is_ok()
-        {
-            removed += 1;
+        if let NodeState::Dead(view) = state {
+            // Another process may be cleaning up the same node; that is fine.
+            let _ = view.try_remove_stale_resources();
         }
         CallbackProgression::Continue
     });
-    removed
 }
 
 /// A new, practically unique writer session id (time and pid, mixed).
