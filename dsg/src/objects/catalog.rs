@@ -2,7 +2,7 @@
 //! and the objects that claim geometry, once for a batch of queries.
 
 use crate::layout::{LayerRole, layer_roles, layer_with_role};
-use rustc_hash::FxHashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::sync::OnceLock;
 use ygg_store::{Aabb, LayerId, NodeId, SceneView};
 
@@ -44,6 +44,8 @@ pub struct Objects<'a, V: SceneView> {
     /// Part boxes of each claimant (same order; empty when not kept), computed by the
     /// first visibility query.
     pub(super) parts: OnceLock<Vec<Vec<Aabb>>>,
+    /// The kept objects carrying each label, ascending, indexed by the first label query.
+    labelled: OnceLock<FxHashMap<String, Vec<NodeId>>>,
     /// With [`Objects::in_subtree`]: every object node kept (with geometry or not).
     pub(super) kept: Option<FxHashSet<NodeId>>,
     /// Whether every layer-DAG parent of every mesh layer is an object layer: then the
@@ -192,6 +194,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
             layer_boxes: OnceLock::new(),
             claimants: OnceLock::new(),
             parts: OnceLock::new(),
+            labelled: OnceLock::new(),
             kept,
             mesh_parents_are_objects,
         }
@@ -338,23 +341,36 @@ impl<'a, V: SceneView> Objects<'a, V> {
         .then_some(id)
     }
 
-    /// Every object node carrying `label`, ascending (O(1) for a label no node has).
+    /// Every object node carrying `label`, ascending.
+    ///
+    /// # Complexity
+    /// The first call indexes the labels of every kept object (O(objects × labels));
+    /// every call after it is one hash lookup and a copy of the answer.
     pub fn objects_with_label(&self, label: &str) -> Vec<NodeId> {
-        let mut out: Vec<NodeId> = Vec::new();
-        for l in self.view.layers_with_label(label) {
-            if self.object_layers.binary_search(&l).is_err() {
-                continue;
+        self.labelled().get(label).cloned().unwrap_or_default()
+    }
+
+    /// The label index of [`Objects::objects_with_label`], built on first use.
+    fn labelled(&self) -> &FxHashMap<String, Vec<NodeId>> {
+        self.labelled.get_or_init(|| {
+            let mut index: FxHashMap<String, Vec<NodeId>> = FxHashMap::default();
+            for &layer in &self.object_layers {
+                for n in self.view.layer_nodes(layer) {
+                    let id = self.view.node_id(n);
+                    if !self.is_kept(id) {
+                        continue;
+                    }
+                    for label in self.view.labels(n) {
+                        index.entry(label.to_owned()).or_default().push(id);
+                    }
+                }
             }
-            out.extend(
-                self.view
-                    .nodes_with_label(l, label)
-                    .map(|n| self.view.node_id(n))
-                    .filter(|id| self.is_kept(*id)),
-            );
-        }
-        // A node lives in one layer: the answers need sorting, not de-duplicating.
-        out.sort_unstable();
-        out
+            for ids in index.values_mut() {
+                ids.sort_unstable();
+                ids.dedup();
+            }
+            index
+        })
     }
 
     /// Whether node `id` lies in an object-mesh layer.
