@@ -7,62 +7,21 @@ mod common;
 use common::{Op, apply, op, seeded_graph};
 use proptest::prelude::*;
 use std::collections::BTreeMap;
-use ygg_store::query;
-use ygg_store::{LayerId, SceneGraph, SceneView};
+use ygg_store::{SceneGraph, SceneView};
+use ygg_testkit::fingerprint::layer_fingerprints;
 
-/// The content of one layer, by name: what its archived segment holds, with the layer
-/// names of every node a row refers to (a row that names a node which moved layers is
-/// rebuilt, so that counts as a change). `with_dag` adds the layer's DAG neighbours.
-fn layer_fingerprint(g: &SceneGraph, l: LayerId, with_dag: bool) -> String {
-    let name = |l: LayerId| g.layer_name(l).unwrap_or("?").to_owned();
-    let layer_of = |id| g.node(id).map(|n| name(g.node_layer(n)));
-    let mut out = format!("layer {:?} index {}\n", name(l), g.layer_index(l).is_some());
-    if with_dag {
-        let mut parents: Vec<_> = g.layer_parents(l).into_iter().map(name).collect();
-        let mut children: Vec<_> = g.layer_children(l).into_iter().map(name).collect();
-        parents.sort_unstable();
-        children.sort_unstable();
-        out += &format!("  dag {parents:?} {children:?}\n");
-    }
-    let mut nodes: Vec<_> = g.layer_nodes(l).map(|n| g.node_id(n)).collect();
-    nodes.sort_unstable();
-    for id in nodes {
-        let n = g.node(id).expect("listed");
-        let mut labels: Vec<_> = g.labels(n).collect();
-        labels.sort_unstable();
-        let mut features: Vec<_> = g.features(n).map(|(k, f)| format!("{k}={f:?}")).collect();
-        features.sort_unstable();
-        let out_edges: Vec<_> = g.out_edges(n).collect();
-        let in_edges: Vec<_> = g.in_edges(n).collect();
-        let children: Vec<_> = g.children(n).iter().map(|&c| (c, layer_of(c))).collect();
-        let index = g.node_index(id).is_some().then(|| {
-            query::subtree(&g, id)
-                .into_iter()
-                .map(|m| (m, layer_of(m), g.node(m).map(|m| g.points(m).to_vec())))
-                .collect::<Vec<_>>()
-        });
-        out += &format!(
-            "  {id} pts {:?} parent {:?} children {children:?} box {:?} {:?} labels {labels:?} \
-             features {features:?} out {out_edges:?} in {in_edges:?} index {index:?}\n",
-            g.points(n),
-            g.parent(n).map(|p| (p, layer_of(p))),
-            g.bounding_box_enabled(id),
-            g.aabb(n),
-        );
+/// Every layer's fingerprint by name, and each node's bounding-box flag (which a view
+/// cannot tell for a node whose sub-tree has no point).
+fn fingerprints(g: &SceneGraph, with_dag: bool) -> BTreeMap<String, String> {
+    let mut out = layer_fingerprints(g, with_dag);
+    for l in g.layers() {
+        let fp = out.get_mut(g.layer_name(l).unwrap()).unwrap();
+        let mut ids: Vec<_> = g.layer_nodes(l).map(|n| g.node_id(n)).collect();
+        ids.sort_unstable();
+        let flags: Vec<_> = ids.iter().map(|&id| g.bounding_box_enabled(id)).collect();
+        *fp += &format!("boxes enabled {flags:?}\n");
     }
     out
-}
-
-/// Every layer's fingerprint, by layer name.
-fn fingerprints(g: &SceneGraph, with_dag: bool) -> BTreeMap<String, String> {
-    g.layers()
-        .map(|l| {
-            (
-                g.layer_name(l).unwrap().to_owned(),
-                layer_fingerprint(g, l, with_dag),
-            )
-        })
-        .collect()
 }
 
 fn generations(g: &SceneGraph) -> BTreeMap<String, u64> {
