@@ -5,7 +5,11 @@ Loads a graph, binds spark_dsg's own `DsgSender` to a free TCP port on 127.0.0.1
 prints `port=N`. Then reads one command a line and answers one line each (`ok ...` or
 `error ...`):
 
-  send [PATH]          send the graph once (PATH: also write the bytes sent there)
+  send [PATH]          send the graph once (PATH: also write the bytes sent there);
+                       answers with the bytes and the CLOCK_MONOTONIC ns just before
+                       the socket's send (after serializing)
+  send-minimal         send a graph of one room R(0) at the origin (same answer): the
+                       smallest graph every layout builds
   move ID DX DY DZ     move node ID (a u64) by the offset
   add ID LAYER X Y Z   add an object node ID to layer LAYER (an int) at X Y Z
   remove ID            remove node ID
@@ -41,13 +45,23 @@ def main() -> int:
         cmd, args = words[0], words[1:]
         try:
             if cmd == "send":
-                t = time.monotonic_ns()
                 data = graph.to_binary(include_mesh=mesh)
                 if args:
                     with open(args[0], "wb") as f:
                         f.write(data)
+                # What DsgSender.send does (`self._socket.send(graph.to_binary(...))`),
+                # with the serialization before the timestamp.
                 t = time.monotonic_ns()
-                sender.send(graph, include_mesh=mesh)
+                sender._socket.send(data)
+                print(f"ok sent bytes={len(data)} t_ns={t}", flush=True)
+            elif cmd == "send-minimal":
+                minimal = dsg.DynamicSceneGraph()
+                attrs = dsg.RoomNodeAttributes()
+                attrs.position = np.zeros(3)
+                minimal.add_node(dsg.DsgLayers.ROOMS, dsg.NodeSymbol("R", 0).value, attrs)
+                data = minimal.to_binary(include_mesh=mesh)
+                t = time.monotonic_ns()
+                sender._socket.send(data)
                 print(f"ok sent bytes={len(data)} t_ns={t}", flush=True)
             elif cmd == "move":
                 node = graph.get_node(int(args[0]))
