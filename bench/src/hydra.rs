@@ -7,6 +7,8 @@
 //! socket's send). Two cases, each sent `--messages` times:
 //! * **full office**: the office after a graph of one room (every consumer gets all of
 //!   it anew);
+//! * **full office, every node moved**: the whole office translated by a centimetre
+//!   (every layer resent, none created);
 //! * **one-object edit**: one object moved by a few centimetres.
 //!
 //! For 1 and 4 consumers, two phases on the same sender (one after the other, so the two
@@ -89,6 +91,10 @@ while True:
 "#;
 
 const STEP: Duration = Duration::from_secs(120);
+
+const NEW: &str = "full office with mesh, all layers new (after a one-room graph)";
+const MOVED: &str = "full office with mesh, every node moved 1 cm (layers kept)";
+const EDIT: &str = "one-object edit";
 
 fn now_ns() -> u64 {
     let t = rustix::time::clock_gettime(rustix::time::ClockId::Monotonic);
@@ -220,27 +226,41 @@ struct Measured {
     cpu_mean: f64,
 }
 
+/// What changes between two measured messages.
+#[derive(Clone, Copy, PartialEq)]
+enum Case {
+    /// The office after a one-room graph: every layer new (created, then retired again).
+    New,
+    /// The whole office translated by a centimetre: every node and vertex moved, every
+    /// layer resent, the layers themselves kept.
+    Moved,
+    /// One object moved by a few centimetres.
+    Edit,
+}
+
 /// Sends `messages` messages of a case and measures every consumer.
 fn measure(
     sender: &mut Sender,
     consumers: &[Consumer],
     cpu_pids: &[u32],
     messages: usize,
-    full: bool,
+    case: Case,
     object: u64,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
     let mut m = Measured::default();
     let batch0: f64 = cpu_pids.iter().map(|&p| cpu_seconds(p)).sum();
     for k in 0..messages {
-        if full {
+        let dx = if k % 2 == 0 { 0.05 } else { -0.05 };
+        if case == Case::New {
             // A one-room graph first (not measured), so the office is all new.
             let seen: Vec<usize> = consumers.iter().map(Consumer::lines).collect();
             sender.send(true)?;
             for (c, &s) in consumers.iter().zip(&seen) {
                 c.line_after(s)?;
             }
+        } else if case == Case::Moved {
+            sender.command(&format!("shift {} 0 0", dx / 5.0))?;
         } else {
-            let dx = if k % 2 == 0 { 0.05 } else { -0.05 };
             sender.command(&format!("move {object} {dx} 0.03 0"))?;
         }
         std::thread::sleep(Duration::from_millis(300));
@@ -268,6 +288,26 @@ fn measure(
     let batch1: f64 = cpu_pids.iter().map(|&p| cpu_seconds(p)).sum();
     m.cpu_mean = (batch1 - batch0) / messages.max(1) as f64;
     Ok(m)
+}
+
+/// Medians (seconds) of the bridge's decode, sync and publish times in its `update`
+/// lines; `full`: only the updates that added the office (not the one-room graphs).
+fn phases(lines: &[String], full: bool) -> [f64; 3] {
+    let updates: Vec<Value> = lines
+        .iter()
+        .filter(|l| l.contains("\"update\""))
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .filter(|v: &Value| !full || v["nodes_added"].as_u64().unwrap_or(0) > 100)
+        .collect();
+    let field = |k: &str| {
+        let v: Vec<f64> = updates
+            .iter()
+            .filter_map(|u| u[k].as_f64())
+            .map(|us| us / 1e6)
+            .collect();
+        med(&v)
+    };
+    [field("decode_us"), field("sync_us"), field("publish_us")]
 }
 
 fn med(v: &[f64]) -> f64 {
@@ -306,6 +346,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
     let writer_bin = ygg_testkit::binary("ygg-writer");
     let me = std::env::current_exe()?;
     let mut results: Vec<(usize, &str, [Measured; 2])> = Vec::new();
+    let mut bridge_phases: Vec<(usize, &str, [f64; 3])> = Vec::new();
     for &n in &args.consumers {
         // Our side: the bridge and n readers.
         let scene = crate::demo::run_scene("hydra");
@@ -350,10 +391,35 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
         let mut pids: Vec<u32> = readers.iter().map(|c| c.proc.pid()).collect();
         pids.push(bridge.pid());
         eprintln!("{n} consumers: Yggdrasil");
-        let ours_full = measure(&mut sender, &readers, &pids, args.messages, true, object)?;
-        let ours_edit = measure(&mut sender, &readers, &pids, args.edits, false, object)?;
+        let at = bridge.stdout().len();
+        let ours_new = measure(
+            &mut sender,
+            &readers,
+            &pids,
+            args.messages,
+            Case::New,
+            object,
+        )?;
+        let mid = bridge.stdout().len();
+        let ours_moved = measure(
+            &mut sender,
+            &readers,
+            &pids,
+            args.messages,
+            Case::Moved,
+            object,
+        )?;
+        let mid2 = bridge.stdout().len();
+        let ours_edit = measure(&mut sender, &readers, &pids, args.edits, Case::Edit, object)?;
+        let lines = bridge.stdout();
+        bridge_phases.push((n, NEW, phases(&lines[at..mid], true)));
+        bridge_phases.push((n, MOVED, phases(&lines[mid..mid2], false)));
+        bridge_phases.push((n, EDIT, phases(&lines[mid2..], false)));
         for r in &readers {
             r.proc.signal(rustix::process::Signal::TERM);
+        }
+        for r in &mut readers {
+            r.proc.wait_exit(STEP);
         }
         drop(readers);
         bridge.signal(rustix::process::Signal::TERM);
@@ -383,11 +449,34 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
             std::thread::sleep(Duration::from_millis(1500));
         }
         let pids: Vec<u32> = receivers.iter().map(|c| c.proc.pid()).collect();
-        let spark_full = measure(&mut sender, &receivers, &pids, args.messages, true, object)?;
-        let spark_edit = measure(&mut sender, &receivers, &pids, args.edits, false, object)?;
+        let spark_new = measure(
+            &mut sender,
+            &receivers,
+            &pids,
+            args.messages,
+            Case::New,
+            object,
+        )?;
+        let spark_moved = measure(
+            &mut sender,
+            &receivers,
+            &pids,
+            args.messages,
+            Case::Moved,
+            object,
+        )?;
+        let spark_edit = measure(
+            &mut sender,
+            &receivers,
+            &pids,
+            args.edits,
+            Case::Edit,
+            object,
+        )?;
         drop(receivers);
-        results.push((n, "full office with mesh", [ours_full, spark_full]));
-        results.push((n, "one-object edit", [ours_edit, spark_edit]));
+        results.push((n, NEW, [ours_new, spark_new]));
+        results.push((n, MOVED, [ours_moved, spark_moved]));
+        results.push((n, EDIT, [ours_edit, spark_edit]));
     }
     sender.proc.send("quit").ok();
     sender.proc.close_stdin();
@@ -408,7 +497,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
         "`ygg-bench hydra` (release build), one run. Sender: spark_dsg {version}'s `DsgSender` socket \
          (Python) publishing the office (scale {}, seed 7, with mesh: {bytes} B as a `.sparkdsg`) \
          as `to_binary(include_mesh=True)`; bridge layout {}. Medians of {} full-office \
-         messages and {} one-object edits per consumer count. \
+         messages (each of the two full cases) and {} one-object edits per consumer count. \
          Send → visible: from just before the sender's socket send to a new validated \
          snapshot in a reader (ours) or the end of `update_from_binary` (spark_dsg); first \
          and last of the N consumers. CPU: user + system seconds per message of all \
@@ -469,6 +558,21 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
         ms(med(&spark_import)),
         med(&spark_import) / med(&ours_import)
     )?;
+    writeln!(
+        md,
+        "The bridge's own phases per message (medians from its `update` lines, ms): \
+         decode + layout build / sync_to / publish:\n"
+    )?;
+    for (n, case, [d, s, p]) in &bridge_phases {
+        writeln!(
+            md,
+            "- {case}, {n} readers: {} / {} / {}",
+            ms(*d),
+            ms(*s),
+            ms(*p)
+        )?;
+    }
+    writeln!(md)?;
     writeln!(md, "Per-message samples (ms; CPU in ms):\n")?;
     for (n, case, [ours, spark]) in &results {
         let list = |v: &[f64], scale: f64| {

@@ -14,6 +14,7 @@ prints `port=N`. Then reads one command a line and answers one line each (`ok ..
   add ID LAYER X Y Z   add an object node ID to layer LAYER (an int) at X Y Z
   remove ID            remove node ID
   edge A B             add the edge A -> B
+  shift DX DY DZ       translate the whole graph (every node and mesh vertex)
   garbage N            send N bytes that are not a graph
   truncated            send the graph cut in half
   ids LAYER            print the ids of the nodes of layer LAYER
@@ -81,6 +82,11 @@ def main() -> int:
             elif cmd == "edge":
                 ok = graph.insert_edge(int(args[0]), int(args[1]))
                 print(f"ok edge {ok}", flush=True)
+            elif cmd == "shift":
+                pose = np.eye(4)
+                pose[:3, 3] = [float(a) for a in args[:3]]
+                graph.transform(pose)
+                print("ok shifted", flush=True)
             elif cmd == "garbage":
                 sender._socket.send(bytes(range(256)) * (int(args[0]) // 256 + 1))
                 print("ok garbage", flush=True)
