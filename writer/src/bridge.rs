@@ -12,8 +12,15 @@
 //! are counted). A frame that does not decode is logged and skipped; readers keep the
 //! last good graph.
 //!
-//! ZeroMQ comes from the pure-Rust `zeromq` crate (ZMTP 3 over TCP, interoperating
-//! with libzmq's PUB sockets), so building needs no system library.
+//! ZeroMQ comes from the pure-Rust `zeromq` crate 0.7 (ZMTP 3 over TCP, interoperating
+//! with libzmq's PUB sockets; tested against pyzmq's), only its tokio runtime and TCP
+//! transport, driven by a current-thread runtime. Why not `zmq` 0.10: it binds libzmq,
+//! which a fresh machine (Rust, cargo, Python, gcc) lacks, so `cargo test --workspace`
+//! would need a system package first. `zeromq` has no `CONFLATE` option; draining the
+//! messages already received and keeping the newest gives the same behaviour for a
+//! full-state stream (the skipped ones are counted in the `update` line's `skipped`).
+//!
+//! The scene is created (and readers can attach) when the first good graph arrives.
 
 use std::time::{Duration, Instant};
 
