@@ -64,6 +64,9 @@ impl SceneGraph {
     /// layer and node indexes enabled. Only what differs is changed: a node equal in
     /// both graphs is not touched, and a layer none of whose nodes changed keeps its
     /// generation (so [`crate::snapshot::SegmentCache`] and the writer do not resend it).
+    /// A node that moves to another layer is removed and added again, so the rows that
+    /// name it (its parent's and children's) are rewritten even where their content reads
+    /// the same.
     ///
     /// Label sets and feature maps are compared as sets; floats are compared bit for bit.
     /// Layer ids are this graph's: a layer new to it gets a fresh id.
