@@ -183,7 +183,10 @@ fn agree(generated: &DsgGraph, file: &DsgGraph) -> Result<(), String> {
 
 /// Our import of `path`, `runs` times after a warm-up: seconds each, and the phases
 /// (read, parse, validate) of the median run.
-fn time_ours(path: &Path, runs: usize) -> Result<(Vec<f64>, [f64; 3]), Box<dyn std::error::Error>> {
+pub(crate) fn time_ours(
+    path: &Path,
+    runs: usize,
+) -> Result<(Vec<f64>, [f64; 3]), Box<dyn std::error::Error>> {
     ygg_dsg::read_file(path)?;
     let mut times = Vec::with_capacity(runs);
     let mut phases = Vec::with_capacity(runs);
@@ -214,7 +217,7 @@ fn time_ours(path: &Path, runs: usize) -> Result<(Vec<f64>, [f64; 3]), Box<dyn s
 
 /// spark_dsg's `DynamicSceneGraph.load` of `path`, `runs` times after a warm-up, in one
 /// Python process: seconds each, and spark_dsg's version.
-fn time_spark_dsg(
+pub(crate) fn time_spark_dsg(
     python: &str,
     path: &Path,
     runs: usize,

@@ -3,6 +3,7 @@
 mod capi;
 mod demo;
 mod dsg_io;
+mod hydra;
 mod ipc;
 mod ladder;
 mod soak;
@@ -33,6 +34,12 @@ enum Command {
     Ipc(ipc::IpcArgs),
     /// Importing the full office (JSON and binary) against spark_dsg's own load.
     DsgIo(dsg_io::DsgIoArgs),
+    /// Hydra's ZMQ stream through `ygg-writer bridge-zmq` and Yggdrasil readers, against
+    /// the same number of spark_dsg DsgReceivers (latency, CPU), and the binary import.
+    Hydra(hydra::HydraArgs),
+    /// A consumer process of `hydra`: prints a JSON line per new snapshot of a scene.
+    #[command(hide = true)]
+    HydraReader(hydra::HydraReaderArgs),
     /// Soak: the office stream for minutes while readers attach, detach, get killed and
     /// restart and the writer is restarted twice; fails on a wrong answer or on growth of
     /// memory, descriptors or /dev/shm files.
@@ -52,6 +59,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::DsgIo(args) => dsg_io::run(&args),
         Command::Soak(args) => soak::run(&args),
         Command::Capi(args) => capi::run(&args),
+        Command::Hydra(args) => hydra::run(&args),
+        Command::HydraReader(args) => hydra::run_reader(&args),
     }
 }
 

@@ -6,6 +6,8 @@
 //! * See [`query`] for the queries, written once over [`SceneView`].
 //! * See [`index`] for the spatial indexes (live, archived, reader-built) behind the
 //!   spatial queries.
+//! * See [`SceneGraph::sync_to`] for making a graph equal another with the fewest
+//!   mutations (a source that resends its whole graph).
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file, and
 //!   [`snapshot::SegmentCache`] for publishing a changing graph incrementally.
 
@@ -24,6 +26,7 @@ pub mod index;
 mod live_view;
 pub mod query;
 pub mod snapshot;
+mod sync;
 mod view;
 
 pub use error::{EditResult, GraphEditError, SnapshotError};
@@ -32,4 +35,5 @@ pub use graph::{Node, SceneGraph};
 pub use id::{Aabb, LayerId, NodeId, Point, distance_squared};
 pub use query::Scope;
 pub use snapshot::{ArchivedScene, SnapshotFile};
+pub use sync::SyncReport;
 pub use view::{EdgeRef, SceneView};

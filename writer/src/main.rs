@@ -2,8 +2,10 @@
 //!
 //! `serve` publishes a scene graph (a `.ygg` file or the built-in office, optionally with
 //! a SLAM-like update stream); `import` converts Spark-DSG JSON; `serve-test` publishes
-//! synthetic segments of chosen sizes, the driver of the transport tests in `tests/`.
+//! synthetic segments of chosen sizes, the driver of the transport tests in `tests/`;
+//! `bridge-zmq` follows a Spark-DSG ZeroMQ stream (Hydra) and publishes what changes.
 
+mod bridge;
 mod import;
 mod window;
 
@@ -44,6 +46,17 @@ enum Command {
     /// Import a Spark-DSG JSON file (.json or .json.gz) into a `.ygg` snapshot in one of
     /// the paper's layouts, with a progress bar.
     Import(import::ImportArgs),
+    /// Bridge a Spark-DSG ZeroMQ stream (spark_dsg's DsgSender, Hydra's ZmqSender) into
+    /// a scene: decode each message, apply only its differences, publish only the
+    /// changed layers.
+    ///
+    /// Prints `{"event":"connected"}` once subscribed, `{"event":"ready",...}` after the
+    /// first graph is published, one `{"event":"update",...}` line per message (the
+    /// layers it changed) or `{"event":"bad-frame",...}` for one that does not decode
+    /// (it is skipped; readers keep the last good graph), and a final
+    /// `{"event":"summary",...}`. Exits cleanly, removing its shared memory, on
+    /// SIGINT/SIGTERM or after --seconds.
+    BridgeZmq(bridge::BridgeArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -112,6 +125,7 @@ fn main() -> ExitCode {
         Command::ServeTest(args) => serve_test(&args),
         Command::Serve(args) => serve(&args),
         Command::Import(args) => import::run(&args).map_err(Into::into),
+        Command::BridgeZmq(args) => bridge::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

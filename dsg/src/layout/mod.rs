@@ -15,7 +15,9 @@
 //! node of the same kind holding its `attributes.position` instead, so it is located by
 //! its position. Every other node's geometry is its position. Mesh node ids are ordered
 //! like their objects' ids, so "ties go to the smaller node id" on mesh nodes means
-//! "ties go to the smaller object id".
+//! "ties go to the smaller object id". Derived ids (mesh and group nodes) come from
+//! their object's or room's own id, not from its rank, so that they stay the same from
+//! one message of a live stream to the next (`ygg-writer bridge-zmq`).
 //!
 //! Features: objects keep `position_x/y/z`; every node keeps `name`, `semantic_label`
 //! and `timestamp_ns` when the file gives them, and its stored Spark-DSG bounding box as
@@ -133,6 +135,25 @@ pub const STORED_BOX_FEATURES: [&str; 6] = [
 
 fn prefixed(prefix: u64, index: u64) -> NodeId {
     NodeId(prefix << 56 | index)
+}
+
+/// Keys for the ids of nodes a layout derives from source nodes (an object's mesh node,
+/// a room's group nodes), by source id: the source id's low 56 bits when all `ids`
+/// share their top byte (Spark-DSG's symbol character) and fit in `bits` bits, else
+/// the rank of the id. Ascending with the source ids either way; and in the first case
+/// stable as the source graph grows and shrinks, so that the unchanged parts of a live
+/// stream keep their ids (and their layers are not resent).
+fn derived_keys(ids: impl IntoIterator<Item = u64>, bits: u32) -> FxHashMap<u64, u64> {
+    let mut ids: Vec<u64> = ids.into_iter().collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let low = |id: u64| id & ((1u64 << 56) - 1);
+    let stable = ids.windows(2).all(|w| w[0] >> 56 == w[1] >> 56)
+        && ids.iter().all(|&id| low(id) < 1u64 << bits);
+    ids.iter()
+        .enumerate()
+        .map(|(rank, &id)| (id, if stable { low(id) } else { rank as u64 }))
+        .collect()
 }
 
 /// The layers holding object geometry in a scene built by [`build`] (those whose
@@ -326,7 +347,8 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             b.g.node(NodeId(rooms[0].id))
                 .map(|n| b.g.node_layer(n))
                 .expect("room added");
-        for (i, r) in rooms.iter().enumerate() {
+        let room_keys = derived_keys(rooms.iter().map(|r| r.id), 55);
+        for r in &rooms {
             let room = NodeId(r.id);
             let group_layer = b.role_layer(LayerRole::RoomGroups { room })?;
             let objects = b.role_layer(LayerRole::ClaimedObjects { room })?;
@@ -336,8 +358,8 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
             b.dag(group_layer, objects)?;
             b.dag(objects, claimed_mesh)?;
             b.dag(group_layer, unclaimed_mesh)?;
-            let claimed = prefixed(ROOM_GROUP, 2 * i as u64);
-            let unclaimed = prefixed(ROOM_GROUP, 2 * i as u64 + 1);
+            let claimed = prefixed(ROOM_GROUP, 2 * room_keys[&r.id]);
+            let unclaimed = prefixed(ROOM_GROUP, 2 * room_keys[&r.id] + 1);
             for g in [claimed, unclaimed] {
                 let r = b.g.add_node(g, group_layer);
                 b.edit(r)?;
@@ -386,7 +408,12 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
     } else {
         Some(b.role_layer(LayerRole::Mesh)?)
     };
-    for (rank, o) in sorted_objects.iter().enumerate() {
+    let object_keys = derived_keys(
+        sorted_objects.iter().map(|o| o.id),
+        if layout == Layout::Saffron { 28 } else { 56 },
+    );
+    for o in &sorted_objects {
+        let key = object_keys[&o.id];
         let mut vertices: Vec<u32> = o.mesh_connections.clone();
         vertices.sort_unstable();
         vertices.dedup();
@@ -416,7 +443,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
         b.dag(object_layer, layer)?;
         if layout == Layout::Saffron {
             for (k, p) in points.into_iter().enumerate() {
-                let id = prefixed(CLAIMED_POINT, (rank as u64) << 28 | k as u64);
+                let id = prefixed(CLAIMED_POINT, key << 28 | k as u64);
                 let r =
                     b.g.add_node(id, layer)
                         .and_then(|()| b.g.set_geometry(id, vec![p]))
@@ -424,7 +451,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
                 b.edit(r)?;
             }
         } else {
-            let id = prefixed(MESH_GROUP, rank as u64);
+            let id = prefixed(MESH_GROUP, key);
             let r =
                 b.g.add_node(id, layer)
                     .and_then(|()| b.g.set_geometry(id, points))
@@ -445,7 +472,10 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
                 per_room.entry(room).or_default().push((v, *p));
             }
         }
-        for (i, (room, points)) in per_room.into_iter().enumerate() {
+        let room_keys = derived_keys(rooms.iter().map(|r| r.id), 55);
+        for (room, points) in per_room {
+            // Vanilla's one group is 0; a room's is its key + 1.
+            let group = room.map_or(0, |r| room_keys[&r] + 1);
             let (layer, parent) = match room {
                 Some(r) => (
                     b.role_layer(LayerRole::UnclaimedMesh { room: NodeId(r) })?,
@@ -466,7 +496,7 @@ pub fn build(dsg: &DsgGraph, layout: Layout) -> Result<SceneGraph, LayoutError> 
                     }
                 }
             } else {
-                let id = prefixed(UNCLAIMED_GROUP, i as u64);
+                let id = prefixed(UNCLAIMED_GROUP, group);
                 let r = b.g.add_node(id, layer).and_then(|()| {
                     b.g.set_geometry(id, points.into_iter().map(|(_, p)| p).collect())
                 });

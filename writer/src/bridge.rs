@@ -1,0 +1,220 @@
+//! `ygg-writer bridge-zmq`: a live bridge from Spark-DSG's ZeroMQ stream (spark_dsg's
+//! `DsgSender`, Hydra's C++ `ZmqSender`) into per-layer shared-memory updates.
+//!
+//! Spark-DSG publishes the whole graph in every message: one frame, the header-less
+//! binary body of `to_binary()`. The bridge subscribes, decodes each message once,
+//! builds it in the chosen layout, brings its live graph to equal it with
+//! [`ygg_store::SceneGraph::sync_to`] (only the differences become mutations) and
+//! publishes: only the layers that changed are resent to readers.
+//!
+//! Like a `CONFLATE` subscriber it works on the newest frame: before decoding, it takes
+//! every further message already received and keeps only the last (the skipped ones
+//! are counted). A frame that does not decode is logged and skipped; readers keep the
+//! last good graph.
+//!
+//! ZeroMQ comes from the pure-Rust `zeromq` crate 0.7 (ZMTP 3 over TCP, interoperating
+//! with libzmq's PUB sockets; tested against pyzmq's), only its tokio runtime and TCP
+//! transport, driven by a current-thread runtime. Why not `zmq` 0.10: it binds libzmq,
+//! which a fresh machine (Rust, cargo, Python, gcc) lacks, so `cargo test --workspace`
+//! would need a system package first. `zeromq` has no `CONFLATE` option; draining the
+//! messages already received and keeping the newest gives the same behaviour for a
+//! full-state stream (the skipped ones are counted in the `update` line's `skipped`).
+//!
+//! The scene is created (and readers can attach) when the first good graph arrives.
+
+use std::time::{Duration, Instant};
+
+use ygg_dsg::DsgVersion;
+use ygg_dsg::layout::{self, Layout};
+use ygg_store::SceneGraph;
+use ygg_writer::SceneWriter;
+use zeromq::{Socket, SocketOptions, SocketRecv, SubSocket};
+
+/// Largest read the socket makes at once: whole-graph messages are megabytes.
+const READ_MAX: usize = 8 << 20;
+/// How often the loop wakes without a message, to see signals and `--seconds`.
+const TICK: Duration = Duration::from_millis(100);
+
+/// Arguments of `ygg-writer bridge-zmq`.
+#[derive(clap::Parser, Debug)]
+pub struct BridgeArgs {
+    /// ZeroMQ endpoint of the Spark-DSG publisher, e.g. tcp://127.0.0.1:8001 (the URL
+    /// given to spark_dsg's DsgSender or Hydra's ZmqSender, with the host to reach).
+    #[arg(long)]
+    connect: String,
+    /// Scene name to publish under (ASCII letters, digits, '-', '_', '.').
+    #[arg(long)]
+    scene: String,
+    /// Layout to build each received graph in (vanilla, chocolate, mint, saffron).
+    #[arg(long, default_value = "mint")]
+    layout: Layout,
+    /// Seconds to wait for the publisher to accept the connection.
+    #[arg(long, default_value_t = 30.0)]
+    connect_timeout: f64,
+    /// Stop after this many seconds; default: run until signalled.
+    #[arg(long)]
+    seconds: Option<f64>,
+    /// Readers the scene supports at once.
+    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
+    max_readers: usize,
+}
+
+/// A frame that could not become a graph.
+#[derive(Debug, thiserror::Error)]
+enum FrameError {
+    #[error("a message of {0} frames (Spark-DSG sends one)")]
+    Frames(usize),
+    #[error(transparent)]
+    Decode(#[from] ygg_dsg::DsgImportError),
+    #[error(transparent)]
+    Layout(#[from] layout::LayoutError),
+}
+
+/// Decodes one message into a graph in `layout`.
+fn decode(frames: Vec<bytes::Bytes>, layout: Layout) -> Result<SceneGraph, FrameError> {
+    let [frame] = <[bytes::Bytes; 1]>::try_from(frames).map_err(|f| FrameError::Frames(f.len()))?;
+    let dsg = ygg_dsg::parse_binary_body(&frame, DsgVersion::V1_1_3, "zmq message")?;
+    Ok(layout::build(&dsg, layout)?)
+}
+
+/// Runs the bridge until a signal, `--seconds`, or a fatal error.
+pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if !(args.connect_timeout.is_finite() && args.connect_timeout > 0.0) {
+        return Err("--connect-timeout must be a positive number of seconds".into());
+    }
+    if args.seconds.is_some_and(|s| !(s.is_finite() && s > 0.0)) {
+        return Err("--seconds must be a positive number".into());
+    }
+    // Check the scene name before connecting (creating the writer checks it again).
+    ygg_transport::protocol::SceneServices::new(&args.scene)?;
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    let mut options = SocketOptions::default();
+    options
+        .connect_timeout(Duration::from_secs_f64(args.connect_timeout))
+        .read_buffer(64 * 1024, READ_MAX, 2);
+    let mut socket = SubSocket::with_options(options);
+    rt.block_on(async {
+        socket.connect(&args.connect).await?;
+        socket.subscribe("").await
+    })
+    .map_err(|e| format!("cannot subscribe to {}: {e}", args.connect))?;
+    println!(
+        "{}",
+        serde_json::json!({"event": "connected", "endpoint": args.connect})
+    );
+
+    let start = Instant::now();
+    let mut writer: Option<SceneWriter> = None;
+    let (mut received, mut skipped, mut bad, mut published) = (0u64, 0u64, 0u64, 0u64);
+    let stop = loop {
+        if let Some(w) = &writer
+            && let Err(e) = w.publisher().wait(Duration::ZERO)
+        {
+            break e.to_string();
+        }
+        if args
+            .seconds
+            .is_some_and(|s| start.elapsed().as_secs_f64() >= s)
+        {
+            break "time limit".to_owned();
+        }
+        // The next message, then every one already here (keep the newest).
+        let next = rt.block_on(async {
+            let first = match tokio::time::timeout(TICK, socket.recv()).await {
+                Err(_) => return Ok(None),
+                Ok(m) => m?,
+            };
+            let mut newest = first;
+            let mut stale = 0u64;
+            while let Ok(m) = tokio::time::timeout(Duration::ZERO, socket.recv()).await {
+                newest = m?;
+                stale += 1;
+            }
+            Ok::<_, zeromq::ZmqError>(Some((newest, stale)))
+        });
+        let (message, stale) = match next {
+            Ok(Some(m)) => m,
+            Ok(None) => continue,
+            Err(e) => {
+                // The publisher went away; the socket reconnects by itself.
+                eprintln!("ygg-writer: bridge: receive: {e}");
+                std::thread::sleep(TICK);
+                continue;
+            }
+        };
+        let t0 = Instant::now();
+        received += 1 + stale;
+        skipped += stale;
+        let bytes: usize = message.iter().map(|f| f.len()).sum();
+        let target = match decode(message.into_vec(), args.layout) {
+            Ok(g) => g,
+            Err(e) => {
+                bad += 1;
+                eprintln!("ygg-writer: bridge: skipped a bad frame ({bytes} bytes): {e}");
+                println!(
+                    "{}",
+                    serde_json::json!({"event": "bad-frame", "bytes": bytes, "error": e.to_string()})
+                );
+                continue;
+            }
+        };
+        let t1 = Instant::now();
+        let (report, sync_us) = match &mut writer {
+            None => {
+                let nodes = target.node_count();
+                let layers = ygg_store::SceneView::layers(&target).count();
+                let mut w = SceneWriter::builder(&args.scene)
+                    .max_readers(args.max_readers)
+                    .create(target)?;
+                let r = w.publish()?;
+                published += 1;
+                println!(
+                    "{}",
+                    serde_json::json!({"event": "ready", "scene": args.scene,
+                        "session": w.publisher().session(), "generation": r.generation,
+                        "nodes": nodes, "layers": layers, "bytes": bytes,
+                        "decode_us": (t1 - t0).as_secs_f64() * 1e6,
+                        "publish_us": t1.elapsed().as_secs_f64() * 1e6})
+                );
+                writer = Some(w);
+                continue;
+            }
+            Some(w) => match w.graph_mut().sync_to(&target) {
+                Ok(r) => (r, t1.elapsed()),
+                Err(e) => {
+                    bad += 1;
+                    eprintln!("ygg-writer: bridge: could not apply a message: {e}");
+                    continue;
+                }
+            },
+        };
+        let w = writer.as_mut().expect("set above");
+        let t2 = Instant::now();
+        let generation = if report.is_empty() {
+            w.generation()
+        } else {
+            published += 1;
+            w.publish()?.generation
+        };
+        println!(
+            "{}",
+            serde_json::json!({"event": "update", "generation": generation, "bytes": bytes,
+                "skipped": stale, "changed_layers": report.changed_layers,
+                "nodes_added": report.nodes_added, "nodes_removed": report.nodes_removed,
+                "nodes_moved": report.nodes_moved, "nodes_changed": report.nodes_changed,
+                "decode_us": (t1 - t0).as_secs_f64() * 1e6,
+                "sync_us": sync_us.as_secs_f64() * 1e6,
+                "publish_us": t2.elapsed().as_secs_f64() * 1e6})
+        );
+    };
+    drop(writer);
+    println!(
+        "{}",
+        serde_json::json!({"event": "summary", "stop": stop, "received": received,
+            "skipped_stale": skipped, "bad_frames": bad, "published": published,
+            "seconds": start.elapsed().as_secs_f64()})
+    );
+    Ok(())
+}
