@@ -22,13 +22,16 @@
 //!
 //! The scene is created (and readers can attach) when the first good graph arrives.
 
+mod follow;
+mod patch;
+
 use std::time::{Duration, Instant};
 
-use ygg_dsg::DsgVersion;
-use ygg_dsg::layout::{self, Layout};
-use ygg_store::SceneGraph;
+use ygg_dsg::layout::Layout;
 use ygg_writer::SceneWriter;
 use zeromq::{Socket, SocketOptions, SocketRecv, SubSocket};
+
+use self::follow::Follower;
 
 /// Largest read the socket makes at once: whole-graph messages are megabytes.
 const READ_MAX: usize = 8 << 20;
@@ -57,24 +60,6 @@ pub struct BridgeArgs {
     /// Readers the scene supports at once.
     #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
-}
-
-/// A frame that could not become a graph.
-#[derive(Debug, thiserror::Error)]
-enum FrameError {
-    #[error("a message of {0} frames (Spark-DSG sends one)")]
-    Frames(usize),
-    #[error(transparent)]
-    Decode(#[from] ygg_dsg::DsgImportError),
-    #[error(transparent)]
-    Layout(#[from] layout::LayoutError),
-}
-
-/// Decodes one message into a graph in `layout`.
-fn decode(frames: Vec<bytes::Bytes>, layout: Layout) -> Result<SceneGraph, FrameError> {
-    let [frame] = <[bytes::Bytes; 1]>::try_from(frames).map_err(|f| FrameError::Frames(f.len()))?;
-    let dsg = ygg_dsg::parse_binary_body(&frame, DsgVersion::V1_1_3, "zmq message")?;
-    Ok(layout::build(&dsg, layout)?)
 }
 
 /// Runs the bridge until a signal, `--seconds`, or a fatal error.
@@ -107,6 +92,7 @@ pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
 
     let start = Instant::now();
     let mut writer: Option<SceneWriter> = None;
+    let mut follower = Follower::new(args.layout);
     let (mut received, mut skipped, mut bad, mut published) = (0u64, 0u64, 0u64, 0u64);
     let stop = loop {
         if let Some(w) = &writer
@@ -148,50 +134,53 @@ pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
         received += 1 + stale;
         skipped += stale;
         let bytes: usize = message.iter().map(|f| f.len()).sum();
-        let target = match decode(message.into_vec(), args.layout) {
-            Ok(g) => g,
-            Err(e) => {
-                bad += 1;
-                eprintln!("ygg-writer: bridge: skipped a bad frame ({bytes} bytes): {e}");
-                println!(
-                    "{}",
-                    serde_json::json!({"event": "bad-frame", "bytes": bytes, "error": e.to_string()})
-                );
-                continue;
-            }
+        let frames = message.into_vec();
+        let bad_frame = |e: &dyn std::fmt::Display| {
+            eprintln!("ygg-writer: bridge: skipped a bad frame ({bytes} bytes): {e}");
+            println!(
+                "{}",
+                serde_json::json!({"event": "bad-frame", "bytes": bytes, "error": e.to_string()})
+            );
         };
-        let t1 = Instant::now();
-        let (report, sync_us) = match &mut writer {
-            None => {
-                let nodes = target.node_count();
-                let layers = ygg_store::SceneView::layers(&target).count();
-                let mut w = SceneWriter::builder(&args.scene)
-                    .max_readers(args.max_readers)
-                    .create(target)?;
-                let r = w.publish()?;
-                published += 1;
-                println!(
-                    "{}",
-                    serde_json::json!({"event": "ready", "scene": args.scene,
-                        "session": w.publisher().session(), "generation": r.generation,
-                        "nodes": nodes, "layers": layers, "bytes": bytes,
-                        "decode_us": (t1 - t0).as_secs_f64() * 1e6,
-                        "publish_us": t1.elapsed().as_secs_f64() * 1e6})
-                );
-                writer = Some(w);
-                continue;
-            }
-            Some(w) => match w.graph_mut().sync_to(&target) {
-                Ok(r) => (r, t1.elapsed()),
+        let Some(w) = writer.as_mut() else {
+            let target = match follower.first(frames) {
+                Ok(Some(g)) => g,
+                Ok(None) => continue,
                 Err(e) => {
                     bad += 1;
-                    eprintln!("ygg-writer: bridge: could not apply a message: {e}");
+                    bad_frame(&e);
                     continue;
                 }
-            },
+            };
+            let t1 = Instant::now();
+            let nodes = target.node_count();
+            let layers = ygg_store::SceneView::layers(&target).count();
+            let mut w = SceneWriter::builder(&args.scene)
+                .max_readers(args.max_readers)
+                .create(target)?;
+            let r = w.publish()?;
+            published += 1;
+            println!(
+                "{}",
+                serde_json::json!({"event": "ready", "scene": args.scene,
+                    "session": w.publisher().session(), "generation": r.generation,
+                    "nodes": nodes, "layers": layers, "bytes": bytes,
+                    "decode_us": (t1 - t0).as_secs_f64() * 1e6,
+                    "publish_us": t1.elapsed().as_secs_f64() * 1e6})
+            );
+            writer = Some(w);
+            continue;
         };
-        let w = writer.as_mut().expect("set above");
+        let applied = match follower.apply(frames, w.graph_mut()) {
+            Ok(a) => a,
+            Err(e) => {
+                bad += 1;
+                bad_frame(&e);
+                continue;
+            }
+        };
         let t2 = Instant::now();
+        let report = &applied.report;
         let generation = if report.is_empty() {
             w.generation()
         } else {
@@ -201,12 +190,14 @@ pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
         println!(
             "{}",
             serde_json::json!({"event": "update", "generation": generation, "bytes": bytes,
-                "skipped": stale, "changed_layers": report.changed_layers,
+                "skipped": stale, "path": applied.path.name(), "mesh_reused": applied.mesh_reused,
+                "changed_layers": report.changed_layers,
                 "nodes_added": report.nodes_added, "nodes_removed": report.nodes_removed,
                 "nodes_moved": report.nodes_moved, "nodes_changed": report.nodes_changed,
-                "decode_us": (t1 - t0).as_secs_f64() * 1e6,
-                "sync_us": sync_us.as_secs_f64() * 1e6,
-                "publish_us": t2.elapsed().as_secs_f64() * 1e6})
+                "decode_us": applied.decode.as_secs_f64() * 1e6,
+                "sync_us": applied.sync.as_secs_f64() * 1e6,
+                "publish_us": t2.elapsed().as_secs_f64() * 1e6,
+                "total_us": t0.elapsed().as_secs_f64() * 1e6})
         );
     };
     drop(writer);
