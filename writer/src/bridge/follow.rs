@@ -213,7 +213,9 @@ mod tests {
     /// Applies `e` to `g`; returns the body to send.
     fn change(g: &mut DsgGraph, e: &Edit) -> Vec<u8> {
         let nth = |g: &DsgGraph, kind: NodeKind, i: usize| {
-            let of: Vec<usize> = (0..g.nodes.len()).filter(|&k| g.nodes[k].kind == kind).collect();
+            let of: Vec<usize> = (0..g.nodes.len())
+                .filter(|&k| g.nodes[k].kind == kind)
+                .collect();
             (!of.is_empty()).then(|| of[i % of.len()])
         };
         match *e {
@@ -239,7 +241,8 @@ mod tests {
                     let id = g.nodes.remove(k).id;
                     g.edges.retain(|x| x.source != id && x.target != id);
                     g.sibling_edges.retain(|x| x.source != id && x.target != id);
-                    g.extra_parent_edges.retain(|x| x.parent != id && x.child != id);
+                    g.extra_parent_edges
+                        .retain(|x| x.parent != id && x.child != id);
                     for n in &mut g.nodes {
                         if n.parent == Some(id) {
                             n.parent = None;
@@ -260,7 +263,10 @@ mod tests {
     /// graph equals the full path's (decode, build, nothing left to sync). Returns how
     /// many messages took each path.
     fn follow(layout: Layout, edits: &[Edit]) -> Result<[usize; 3], TestCaseError> {
-        let mut g = generate(OfficeParams { seed: 5, scale: 0.03 });
+        let mut g = generate(OfficeParams {
+            seed: 5,
+            scale: 0.03,
+        });
         let mut follower = Follower::new(layout);
         let first = Bytes::from(to_binary_body(&g).expect("encode"));
         let mut live = follower.first(vec![first]).expect("first").expect("new");
