@@ -7,6 +7,12 @@
 //! [`ygg_store::SceneGraph::sync_to`] (only the differences become mutations) and
 //! publishes: only the layers that changed are resent to readers.
 //!
+//! Most of each message is what the last one held, so [`follow`] does not redo it: a
+//! message equal to the last byte for byte is dropped, an unchanged mesh section is
+//! compared rather than decoded ([`ygg_dsg::BodyStream`]), and a message in which nodes
+//! only moved becomes those nodes' mutations without building the layout ([`patch`]);
+//! anything else takes the general path above. Each `update` line names the `path` taken.
+//!
 //! Like a `CONFLATE` subscriber it works on the newest frame: before decoding, it takes
 //! every further message already received and keeps only the last (the skipped ones
 //! are counted). A frame that does not decode is logged and skipped; readers keep the
