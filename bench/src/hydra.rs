@@ -291,9 +291,12 @@ fn measure(
 }
 
 /// Medians (seconds) of the bridge's decode, sync and publish times in its `update`
-/// lines, and how many updates took each path (`patch 20`, `build 5`, ...); `full`: only
-/// the updates that added the office (not the one-room graphs).
-fn phases(lines: &[String], full: bool) -> ([f64; 3], String) {
+/// lines, and how many updates took each path (`patch 20`, `build 5`, ...).
+type Phases = ([f64; 3], String);
+
+/// The bridge's [`Phases`] in its output `lines`; `full`: only the updates that added
+/// the office (not the one-room graphs).
+fn phases(lines: &[String], full: bool) -> Phases {
     let updates: Vec<Value> = lines
         .iter()
         .filter(|l| l.contains("\"update\""))
@@ -359,7 +362,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
     let writer_bin = ygg_testkit::binary("ygg-writer");
     let me = std::env::current_exe()?;
     let mut results: Vec<(usize, &str, [Measured; 2])> = Vec::new();
-    let mut bridge_phases: Vec<(usize, &str, ([f64; 3], String))> = Vec::new();
+    let mut bridge_phases: Vec<(usize, &str, Phases)> = Vec::new();
     for &n in &args.consumers {
         // Our side: the bridge and n readers.
         let scene = crate::demo::run_scene("hydra");
