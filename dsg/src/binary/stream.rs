@@ -25,8 +25,13 @@ use crate::json::build_graph;
 use crate::model::{DsgGraph, DsgVersion};
 use crate::report::ImportOptions;
 
-/// A decoder for successive header-less bodies of one stream, reusing the last body's
-/// mesh when its bytes did not change (see the [module docs](self)).
+/// A decoder for successive header-less bodies of one stream (Spark-DSG's ZMQ messages,
+/// each the whole graph), reusing what the last good body already decoded: a body equal
+/// to it byte for byte is not decoded at all, and when only the nodes or edges differ,
+/// the mesh section (mesh flag to end: most of a message) is compared instead of
+/// decoded and the last graph's mesh moves to the new one. The graph it yields always
+/// equals [`parse_binary_body`](crate::parse_binary_body)'s for the same body, and a body
+/// that does not decode leaves the stream as it was.
 ///
 /// `B` is the buffer type the bodies arrive in (`Vec<u8>`, `bytes::Bytes`, ...): the
 /// stream keeps the last good body to compare the next one with, without copying it.
