@@ -291,8 +291,12 @@ fn measure(
 }
 
 /// Medians (seconds) of the bridge's decode, sync and publish times in its `update`
-/// lines; `full`: only the updates that added the office (not the one-room graphs).
-fn phases(lines: &[String], full: bool) -> [f64; 3] {
+/// lines, and how many updates took each path (`patch 20`, `build 5`, ...).
+type Phases = ([f64; 3], String);
+
+/// The bridge's [`Phases`] in its output `lines`; `full`: only the updates that added
+/// the office (not the one-room graphs).
+fn phases(lines: &[String], full: bool) -> Phases {
     let updates: Vec<Value> = lines
         .iter()
         .filter(|l| l.contains("\"update\""))
@@ -307,7 +311,19 @@ fn phases(lines: &[String], full: bool) -> [f64; 3] {
             .collect();
         med(&v)
     };
-    [field("decode_us"), field("sync_us"), field("publish_us")]
+    let mut paths = std::collections::BTreeMap::new();
+    for u in &updates {
+        *paths.entry(u["path"].as_str().unwrap_or("?")).or_insert(0) += 1;
+    }
+    let paths = paths
+        .iter()
+        .map(|(p, n)| format!("{p} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    (
+        [field("decode_us"), field("sync_us"), field("publish_us")],
+        paths,
+    )
 }
 
 fn med(v: &[f64]) -> f64 {
@@ -346,7 +362,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
     let writer_bin = ygg_testkit::binary("ygg-writer");
     let me = std::env::current_exe()?;
     let mut results: Vec<(usize, &str, [Measured; 2])> = Vec::new();
-    let mut bridge_phases: Vec<(usize, &str, [f64; 3])> = Vec::new();
+    let mut bridge_phases: Vec<(usize, &str, Phases)> = Vec::new();
     for &n in &args.consumers {
         // Our side: the bridge and n readers.
         let scene = crate::demo::run_scene("hydra");
@@ -561,12 +577,14 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
     writeln!(
         md,
         "The bridge's own phases per message (medians from its `update` lines, ms): \
-         decode + layout build / sync_to / publish:\n"
+         decode (+ layout build on the build path) / sync_to or patch / publish, and the \
+         paths the updates took (`patch`: node moves applied without building the layout; \
+         `build`: the layout built and synced to):\n"
     )?;
-    for (n, case, [d, s, p]) in &bridge_phases {
+    for (n, case, ([d, s, p], paths)) in &bridge_phases {
         writeln!(
             md,
-            "- {case}, {n} readers: {} / {} / {}",
+            "- {case}, {n} readers: {} / {} / {} ({paths})",
             ms(*d),
             ms(*s),
             ms(*p)

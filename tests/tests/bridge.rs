@@ -245,6 +245,10 @@ fn bridge_follows_a_spark_dsg_sender_and_republishes_only_the_layers_touched() {
         let skip = bridge.stdout().len();
         command(&mut sender, &format!("send {}", path.display()));
         let update = bridge_event(&bridge, skip, "update");
+        // Without a mesh sent, an object's geometry is its position, held by a node the
+        // layout derives: even its move builds the layout and syncs to it.
+        assert_eq!(update["path"], "build", "{what}: {update}");
+        assert_eq!(update["mesh_reused"], true, "{what}: {update}");
         let (next_dsg, next_want) = expected(&path);
         let generation = update["generation"].as_u64().expect("generation");
         let before = generations(&snap);
@@ -299,17 +303,20 @@ fn bridge_follows_a_spark_dsg_sender_and_republishes_only_the_layers_touched() {
         layer_fingerprints(&held.view(), true),
         layer_fingerprints(&want, true)
     );
-    // The same graph again: nothing to publish. Then an edit still goes through.
+    // The same graph again: nothing to publish. Then a move still goes through, patched
+    // (a place's geometry is its position).
     let skip = bridge.stdout().len();
     command(&mut sender, "send");
     let update = bridge_event(&bridge, skip, "update");
     assert_eq!(update["changed_layers"], serde_json::json!([]), "{update}");
+    assert_eq!(update["path"], "unchanged", "{update}");
     assert_eq!(update["generation"].as_u64(), Some(snap.generation()));
-    command(&mut sender, &format!("move {} 0 0 0.25", objects[2]));
+    command(&mut sender, &format!("move {} 0 0 0.25", places[2]));
     let path = dir.path().join("last.bin");
     let skip = bridge.stdout().len();
     command(&mut sender, &format!("send {}", path.display()));
     let update = bridge_event(&bridge, skip, "update");
+    assert_eq!(update["path"], "patch", "{update}");
     let last = snapshot_at(&mut reader, update["generation"].as_u64().unwrap());
     let (last_dsg, last_want) = expected(&path);
     assert_eq!(

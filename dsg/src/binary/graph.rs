@@ -75,7 +75,37 @@ pub(super) fn read_body<'a>(
     version: DsgVersion,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Decoded<RawFile<'a>> {
-    let total = Some((base + body.len()) as u64);
+    let c = &mut Cursor::new(body, base);
+    let mut raw = read_graph(c, version, progress)?;
+    raw.mesh = read_tail(c)?;
+    progress(ImportProgress::new(
+        ImportPhase::Parse,
+        c.offset() as u64,
+        Some((base + body.len()) as u64),
+    ));
+    Ok(raw)
+}
+
+/// Decodes what follows the edges: the mesh flag and mesh, then the end of the buffer.
+pub(super) fn read_tail(c: &mut Cursor<'_>) -> Decoded<Option<RawMesh>> {
+    let mesh = graph_mesh(c)?;
+    if !c.at_end() {
+        return Err(c.error(
+            "",
+            format!("{} bytes after the end of the graph", c.remaining()),
+        ));
+    }
+    Ok(mesh)
+}
+
+/// Decodes a body up to the end of its edges (the cursor is then at the mesh flag),
+/// with no mesh in the result.
+pub(super) fn read_graph<'a>(
+    c: &mut Cursor<'a>,
+    version: DsgVersion,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Decoded<RawFile<'a>> {
+    let total = Some(c.total_len() as u64);
     let report = |c: &Cursor<'_>, progress: &mut dyn FnMut(ImportProgress)| {
         progress(ImportProgress::new(
             ImportPhase::Parse,
@@ -84,7 +114,6 @@ pub(super) fn read_body<'a>(
         ));
     };
     let v = Ver(version);
-    let c = &mut Cursor::new(body, base);
     let (layer_keys, layer_ids) = if v.before(1, 1, 2) {
         let n = c.array_len(9, "layer_ids")?;
         let mut ids = Vec::with_capacity(n);
@@ -155,15 +184,6 @@ pub(super) fn read_body<'a>(
         edges.push(edge(c, &edge_types, v).map_err(|e| e.within(format!("edges[{i}]")))?);
     }
     report(c, progress);
-
-    let mesh = graph_mesh(c)?;
-    if !c.at_end() {
-        return Err(c.error(
-            "",
-            format!("{} bytes after the end of the graph", c.remaining()),
-        ));
-    }
-    report(c, progress);
     Ok(RawFile {
         header: Some(RawHeader {
             version: RawVersion {
@@ -177,7 +197,7 @@ pub(super) fn read_body<'a>(
         layer_names,
         nodes: Some(nodes),
         edges: Some(edges),
-        mesh,
+        mesh: None,
         metadata,
     })
 }

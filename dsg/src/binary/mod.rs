@@ -31,9 +31,11 @@ mod export;
 mod graph;
 mod mesh;
 mod reader;
+mod stream;
 mod writer;
 
 pub use self::export::{to_binary_body, to_binary_bytes, write_binary};
+pub use self::stream::{BodyStream, StreamStep};
 
 use self::reader::DecodeError;
 use crate::error::DsgImportError;
@@ -182,6 +184,18 @@ fn parse(
     options: ImportOptions,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Result<Imported, DsgImportError> {
+    check_version(version, source_name)?;
+    let len = (base + body.len()) as u64;
+    progress(ImportProgress::new(ImportPhase::Parse, 0, Some(len)));
+    let raw =
+        graph::read_body(body, base, version, progress).map_err(|e| e.into_import(source_name))?;
+    let imported = build_graph(raw, source_name, options, progress)?;
+    progress(ImportProgress::new(ImportPhase::Done, len, Some(len)));
+    Ok(imported)
+}
+
+/// Whether bodies encoded at `version` can be read: major version 1, from 1.0.2.
+fn check_version(version: DsgVersion, source_name: &str) -> Result<(), DsgImportError> {
     if version.major != 1 {
         return Err(DsgImportError::UnsupportedVersion {
             file: source_name.to_owned(),
@@ -199,13 +213,7 @@ fn parse(
         )
         .into_import(source_name));
     }
-    let len = (base + body.len()) as u64;
-    progress(ImportProgress::new(ImportPhase::Parse, 0, Some(len)));
-    let raw =
-        graph::read_body(body, base, version, progress).map_err(|e| e.into_import(source_name))?;
-    let imported = build_graph(raw, source_name, options, progress)?;
-    progress(ImportProgress::new(ImportPhase::Done, len, Some(len)));
-    Ok(imported)
+    Ok(())
 }
 
 impl DecodeError {

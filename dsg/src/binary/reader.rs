@@ -162,6 +162,16 @@ impl<'a> Cursor<'a> {
         self.base + self.pos
     }
 
+    /// Position in the buffer (from its start, without `base`).
+    pub(super) fn position(&self) -> usize {
+        self.pos
+    }
+
+    /// `base` plus the buffer's length: the offset of its end, as errors report it.
+    pub(super) fn total_len(&self) -> usize {
+        self.base + self.buf.len()
+    }
+
     /// Bytes not read yet.
     pub(super) fn remaining(&self) -> usize {
         self.buf.len() - self.pos
