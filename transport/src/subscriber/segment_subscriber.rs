@@ -171,6 +171,7 @@ impl SubscriberBuilder {
             catch_up_asked: None,
             delivered: None,
             status: WriterStatus::Unknown,
+            gone_session: None,
             gone_unreported: false,
             next_liveness_check: Instant::now(),
             fast_checks_until: None,
@@ -227,6 +228,8 @@ pub struct SegmentSubscriber {
     /// (session, generation) of the snapshot last handed out.
     delivered: Option<(u64, u64)>,
     status: WriterStatus,
+    /// The session of the current snapshot when the writer was found gone.
+    gone_session: Option<u64>,
     gone_unreported: bool,
     next_liveness_check: Instant,
     fast_checks_until: Option<Instant>,
@@ -364,6 +367,13 @@ impl SegmentSubscriber {
         let assembly = &mut self.assembly;
         let first_error = drain(&self.stream, |segment| assembly.accept(segment));
         self.assembly.retry_pending();
+        // A snapshot of another writer session after the writer was found gone: a restarted
+        // writer publishes; find out now rather than at the next periodic check.
+        if self.status == WriterStatus::Gone
+            && self.assembly.current().map(|c| c.session) != self.gone_session
+        {
+            self.check_liveness();
+        }
         if !self.assembly.is_stuck() {
             self.catch_up_asked = None;
         } else if self
@@ -423,6 +433,7 @@ impl SegmentSubscriber {
             (false, WriterStatus::Gone) => {}
             (false, _) => {
                 self.status = WriterStatus::Gone;
+                self.gone_session = self.assembly.current().map(|c| c.session);
                 self.gone_unreported = true;
                 self.fast_checks_until = None;
                 // Whatever the dead writer left half-published can never complete.
