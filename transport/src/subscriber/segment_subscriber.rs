@@ -17,6 +17,7 @@ use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use iceoryx2_bb_posix::signal::SignalHandler;
 
 use super::assembly::Assembly;
 use super::segment::HeldSegment;
@@ -267,8 +268,9 @@ impl SegmentSubscriber {
     /// application that waits elsewhere notice the request.
     pub fn termination_requested(&self) -> bool {
         if self.handle_signals && !self.terminated.load(Ordering::Relaxed) {
-            // iceoryx2 hands out each signal once: remember it.
-            let seen = self.node.wait(Duration::ZERO).is_err();
+            // iceoryx2 hands out each signal once: remember it. (Asked of its signal handler
+            // directly: `Node::wait` would cost a `nanosleep` system call on every wake-up.)
+            let seen = SignalHandler::termination_requested();
             self.terminated.fetch_or(seen, Ordering::Relaxed);
         }
         self.terminated.load(Ordering::Relaxed)
@@ -374,7 +376,10 @@ impl SegmentSubscriber {
         {
             self.check_liveness();
         }
-        if !self.assembly.is_stuck() {
+        // Stuck on a manifest, or no snapshot at all yet (the answer to the first hello may
+        // have been empty or lost): ask (again) for a catch-up.
+        let waiting = self.assembly.is_stuck() || self.assembly.current().is_none();
+        if !waiting {
             self.catch_up_asked = None;
         } else if self
             .catch_up_asked
