@@ -11,8 +11,8 @@
 //!   <answered> <cpu ns>` lines and `end`.
 //! * `attach`: the attach-to-first-answer measurement: from the process's start, opens the
 //!   reader, waits for the first snapshot and answers a nearest-node query on it, then
-//!   prints `ready <gen> <start ns> <answered ns>` and idles until stdin closes (so the
-//!   benchmark can count its descriptors).
+//!   prints `ready <gen> <start ns> <answered ns> <process CPU ns>` and idles until stdin
+//!   closes (so the benchmark can count its descriptors).
 //! * `bare`: the bare iceoryx2 subscriber of the physical floor ([`super::bare`]).
 //! * `qps`: on `start`, loops `latest()` + nearest-node query on the newest snapshot until
 //!   `stop`, then prints `qps <queries> <elapsed ns> <median ns> <p99 ns> <snapshots>`.
@@ -139,7 +139,10 @@ fn attach_timed(args: &ReaderArgs, started: u64, commands: &Receiver<Cmd>) -> Re
     let (_reader, first) = attach(args)?;
     std::hint::black_box(query(&first.view(), layer, &mut Points(1))?);
     let answered = unix_ns();
-    println!("ready {} {started} {answered}", first.generation());
+    let cpu = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
+    let cpu_ns = u64::try_from(cpu.tv_sec).unwrap_or(0) * 1_000_000_000
+        + u64::try_from(cpu.tv_nsec).unwrap_or(0);
+    println!("ready {} {started} {answered} {cpu_ns}", first.generation());
     loop {
         match commands.recv() {
             Ok(Cmd::Exit) | Err(_) => return Ok(()),

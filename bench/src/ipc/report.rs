@@ -316,10 +316,11 @@ fn floor_targets(rows: &[Row]) -> Vec<Target> {
             let ratios = [within("writer_fds"), within("reader_fds"), within("shm_files")];
             let line = |r: &Row| {
                 format!(
-                    "{} layers: attach p50 {} (from spawn {}), writer {} fds, reader {} fds, {} /dev/shm files",
+                    "{} layers: attach p50 {} (from spawn {}; the reader process's CPU time to its answer {}), writer {} fds, reader {} fds, {} /dev/shm files",
                     r.get("layers").unwrap_or(f64::NAN),
                     fmt_us(r.median_us),
                     fmt_us(r.get("from_spawn_median_us").unwrap_or(f64::NAN)),
+                    fmt_us(r.get("process_cpu_us").unwrap_or(f64::NAN)),
                     r.get("writer_fds").unwrap_or(f64::NAN),
                     r.get("reader_fds").unwrap_or(f64::NAN),
                     r.get("shm_files").unwrap_or(f64::NAN)

@@ -38,6 +38,7 @@ pub(super) fn case_attach(
         let writer_fds = descriptors("self")?.saturating_sub(before);
         let mut attach = Vec::with_capacity(samples);
         let mut from_spawn = Vec::with_capacity(samples);
+        let mut cpu = Vec::with_capacity(samples);
         let (mut reader_fds, mut files) = (Vec::new(), Vec::new());
         for _ in 0..samples {
             check_interrupted()?;
@@ -53,10 +54,11 @@ pub(super) fn case_attach(
                 .skip(1)
                 .filter_map(|x| x.parse().ok())
                 .collect();
-            let [_, started, answered] = v[..] else {
+            let [_, started, answered, cpu_ns] = v[..] else {
                 return Err(format!("malformed attach line {line:?}").into());
             };
             attach.push(answered.saturating_sub(started) as f64);
+            cpu.push(cpu_ns as f64);
             from_spawn.push(answered.saturating_sub(spawned) as f64);
             reader_fds.push(descriptors(&p.pid().to_string())? as f64);
             files.push(shm_files(&scene.prefix)? as f64);
@@ -66,6 +68,7 @@ pub(super) fn case_attach(
         drop(w);
         Ok(Row::latency(case, what, &attach)
             .with("from_spawn_median_us", median(&from_spawn) / 1e3)
+            .with("process_cpu_us", median(&cpu) / 1e3)
             .with("layers", layers as f64)
             .with("writer_fds", writer_fds as f64)
             .with("reader_fds", median(&reader_fds))
