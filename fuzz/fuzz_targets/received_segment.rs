@@ -24,7 +24,7 @@ fuzz_target!(|data: &[u8]| {
         version: u16_at(4),
         kind: u16_at(6),
         layer_id: u32_at(8),
-        reserved: u32_at(12),
+        flags: u32_at(12),
         session: u64_at(16),
         generation: u64_at(24),
         len: u64_at(32),

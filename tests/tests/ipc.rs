@@ -441,8 +441,7 @@ fn manifests_must_name_published_generations() {
 
 /// A writer that speaks the protocol badly: raw iceoryx2 ports with our wire types.
 struct FakeWriter {
-    manifest: Publisher<Ipc, [Block128], SegmentHeader>,
-    layer: Publisher<Ipc, [Block128], SegmentHeader>,
+    segments: Publisher<Ipc, [Block128], SegmentHeader>,
     events: iceoryx2::port::notifier::Notifier<Ipc>,
     _services: Vec<Box<dyn std::any::Any>>,
     _node: iceoryx2::prelude::Node<Ipc>,
@@ -468,8 +467,7 @@ impl FakeWriter {
                 .open_or_create()
                 .expect("pubsub service")
         };
-        let manifest_service = pubsub(&names.manifest());
-        let layer_service = pubsub(&names.layer(Self::LAYER));
+        let segments_service = pubsub(&names.segments());
         let event = |name: &str| {
             node.service_builder(&ServiceName::new(name).expect("name"))
                 .event()
@@ -479,12 +477,7 @@ impl FakeWriter {
         };
         let events_service = event(&names.events());
         let readers_service = event(&names.readers());
-        let manifest = manifest_service
-            .publisher_builder()
-            .initial_max_slice_len(64)
-            .create()
-            .expect("publisher");
-        let layer = layer_service
+        let segments = segments_service
             .publisher_builder()
             .initial_max_slice_len(64)
             .create()
@@ -494,12 +487,10 @@ impl FakeWriter {
             .create()
             .expect("notifier");
         Self {
-            manifest,
-            layer,
+            segments,
             events,
             _services: vec![
-                Box::new(manifest_service),
-                Box::new(layer_service),
+                Box::new(segments_service),
                 Box::new(events_service),
                 Box::new(readers_service),
             ],
@@ -530,22 +521,21 @@ impl FakeWriter {
     }
 
     fn manifest(&self, header: SegmentHeader, blocks: usize, fill: impl FnOnce(&mut [u8])) {
-        Self::send(&self.manifest, header, blocks, fill);
+        Self::send(&self.segments, header, blocks, fill);
         let _ = self
             .events
             .notify_with_custom_event_id(EVENT_SNAPSHOT_PUBLISHED);
     }
 
     fn layer(&self, header: SegmentHeader, blocks: usize) {
-        Self::send(&self.layer, header, blocks, |b| b.fill(0x5a));
+        Self::send(&self.segments, header, blocks, |b| b.fill(0x5a));
     }
 
     /// What the real writer's helper thread does on a reader's announcement: deliver the
     /// history to new subscribers and wake the readers.
     fn pump(&self) {
         use iceoryx2::port::update_connections::UpdateConnections;
-        let _ = self.manifest.update_connections();
-        let _ = self.layer.update_connections();
+        let _ = self.segments.update_connections();
         let _ = self
             .events
             .notify_with_custom_event_id(EVENT_SNAPSHOT_PUBLISHED);
@@ -650,11 +640,13 @@ fn garbage_segments_are_reported_not_crashed_on() {
     let e = next_error(&mut reader, &fake);
     assert!(matches!(&e, ReceiveError::Corrupt { .. }), "{e:?}");
 
-    // A layer segment on the wrong service, then one too short for its header.
-    fake.layer(SegmentHeader::new(SegmentKind::Layer, 8, 1, 6, 16, 0), 1);
+    // A segment of an unknown kind, then one too short for its header.
+    let mut unknown = SegmentHeader::new(SegmentKind::Layer, 8, 1, 6, 16, 0);
+    unknown.kind = 9;
+    fake.layer(unknown, 1);
     fake.manifest(manifest(6, 256), 2, |b| valid_manifest_prefix(b, 6));
     let e = next_error(&mut reader, &fake);
-    assert_corrupt!(e, SegmentError::LayerIdMismatch { .. });
+    assert_corrupt!(e, SegmentError::UnknownKind { found: 9 });
     fake.layer(
         SegmentHeader::new(SegmentKind::Layer, FakeWriter::LAYER, 1, 6, 1 << 40, 0),
         1,

@@ -3,9 +3,9 @@
 /// Raises the soft limit of open file descriptors to the hard limit and returns the new soft
 /// limit (`None`: unlimited).
 ///
-/// Every iceoryx2 service costs a process several descriptors (about six per layer for a
-/// reader or the writer: 64 layers took ~410), so scenes with many layers exceed the usual
-/// soft limit of 1024. Binaries call this at start; libraries leave it to the application.
+/// A scene costs a process about 40 descriptors whatever its number of layers, but an
+/// application may attach to many scenes (and protocol 2 writers cost about six per layer).
+/// Binaries call this at start; libraries leave it to the application.
 ///
 /// # Errors
 ///

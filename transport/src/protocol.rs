@@ -6,12 +6,20 @@
 //!
 //! # Services of one scene
 //!
+//! Three services per scene, whatever its number of layers:
+//!
 //! | service | pattern | direction | content |
 //! |---|---|---|---|
-//! | `ygg/<scene>/layer/<id>` | publish-subscribe `[Block128]` + [`SegmentHeader`] | writer -> readers | one layer's archived bytes |
-//! | `ygg/<scene>/manifest` | publish-subscribe `[Block128]` + [`SegmentHeader`] | writer -> readers | [manifest prefix](encode_manifest_prefix), then the store's manifest bytes |
+//! | `ygg/<scene>/segments` | publish-subscribe `[Block128]` + [`SegmentHeader`] | writer -> readers | every segment in publish order (a cut's segments, then its manifest), and catch-up bursts |
 //! | `ygg/<scene>/events` | event | writer -> readers | [`EVENT_SNAPSHOT_PUBLISHED`], [`EVENT_WRITER_GONE`] |
-//! | `ygg/<scene>/readers` | event | readers -> writer | [`EVENT_READER_HELLO`] |
+//! | `ygg/<scene>/readers` | event | readers -> writer | [`EVENT_READER_HELLO`] (a catch-up request) |
+//!
+//! A segment is identified by its header: kind, segment id ([`SegmentHeader::layer_id`], an
+//! opaque `u32` to the transport), writer session and generation. A manifest is a
+//! [manifest prefix](encode_manifest_prefix) followed by the store's manifest bytes. A
+//! *catch-up burst* ([`FLAG_CATCH_UP`]) is a copy of every segment of the current snapshot
+//! followed by its manifest, sent when a reader asks: a reader that connects, or that lost
+//! segments to overflow. Its segments may interleave with the cuts being published.
 //!
 //! # Invariants
 //!
@@ -54,8 +62,10 @@ pub const SEGMENT_MAGIC: u32 = u32::from_le_bytes(*b"YGGS");
 /// `"YGGM"`: magic number at the start of a manifest payload.
 pub const MANIFEST_MAGIC: u32 = u32::from_le_bytes(*b"YGGM");
 
-/// Version of this protocol; readers reject segments of another version.
-pub const PROTOCOL_VERSION: u16 = 2;
+/// Version of this protocol; readers reject segments of another version. Version 3 carries
+/// all segments of a scene over one stream service plus a catch-up service (version 2 had a
+/// service per layer).
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Most layers one manifest may name.
 pub const MAX_LAYERS: usize = 4096;
@@ -66,18 +76,30 @@ pub const MANIFEST_FIXED_LEN: usize = 16;
 /// Size of one encoded [`ManifestEntry`].
 pub const MANIFEST_ENTRY_LEN: usize = 16;
 
-/// Samples a publisher keeps for late joiners. One is enough: a layer is republished only
-/// when it changes, so the newest sample is the one any manifest can name.
-pub const HISTORY_SIZE: usize = 1;
+/// Default for the most segments one snapshot may name (layers, or chunks of layers): sizes
+/// the segment stream's pool (see [`stream_buffer_size`], [`stream_max_borrowed`]).
+pub const DEFAULT_MAX_SEGMENTS: usize = 512;
 
-/// Samples a subscriber buffers. Two cover one publish racing a read (DESIGN.md §5).
-pub const SUBSCRIBER_BUFFER_SIZE: usize = 2;
+/// Samples a reader's subscription to the segment stream buffers between two receives: one
+/// whole snapshot and its manifest, so that neither a catch-up burst nor a cut that changes
+/// every segment overflows a reader that keeps up. A reader that falls further behind loses
+/// its oldest buffered samples (safe overflow), notices the hole and asks for a catch-up.
+pub const fn stream_buffer_size(max_segments: usize) -> usize {
+    max_segments + 2
+}
 
-/// Samples one reader may hold per service: the current snapshot's, up to two newer ones
-/// waiting for their manifest, the one being received, and one for an older snapshot the
-/// application still holds. Costs address space only: iceoryx2 reuses freed chunks last-in
-/// first-out, so shared-memory pages are touched only for samples really in use.
-pub const SUBSCRIBER_MAX_BORROWED: usize = 5;
+/// Samples one subscriber may hold from the segment stream when snapshots name at most
+/// `max_segments` segments: the current snapshot's, newer ones waiting for their manifest
+/// (or a burst being received), and a few manifests and samples of older snapshots the
+/// application still holds. Costs address space and a byte per sample and possible
+/// reallocation in each connection: iceoryx2 reuses freed chunks last-in first-out, so
+/// shared-memory pages are touched only for samples really in use.
+pub const fn stream_max_borrowed(max_segments: usize) -> usize {
+    2 * max_segments + 16
+}
+
+/// [`SegmentHeader::flags`] bit: the segment is a catch-up copy of the current snapshot.
+pub const FLAG_CATCH_UP: u32 = 1;
 
 /// Samples the writer may hold on loan per service (it fills one at a time).
 pub const PUBLISHER_MAX_LOANED: usize = 1;
@@ -88,13 +110,14 @@ pub const DEFAULT_MAX_READERS: usize = 8;
 /// Highest event id used on the event services.
 pub const EVENT_ID_MAX: usize = 7;
 
-/// Writer -> readers: a new manifest was published (or history was delivered to a new reader).
+/// Writer -> readers: a new manifest was published (or a catch-up burst was sent).
 pub const EVENT_SNAPSHOT_PUBLISHED: EventId = EventId::new(1);
 
 /// Writer -> readers: the writer is shutting down, or was found dead.
 pub const EVENT_WRITER_GONE: EventId = EventId::new(2);
 
-/// Reader -> writer: a reader created subscribers and wants the history delivered now.
+/// Reader -> writer: a reader connected, or found a hole in the stream, and asks for a
+/// catch-up burst of the current snapshot.
 pub const EVENT_READER_HELLO: EventId = EventId::new(3);
 
 /// Writer-internal: wakes the writer's helper thread so it can stop.
@@ -181,10 +204,11 @@ pub struct SegmentHeader {
     pub version: u16,
     /// [`SegmentKind`] as `u16`.
     pub kind: u16,
-    /// The layer id, or [`MANIFEST_LAYER_ID`] for a manifest.
+    /// The segment id (a layer, or a chunk of one; opaque to the transport), or
+    /// [`MANIFEST_LAYER_ID`] for a manifest.
     pub layer_id: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// [`FLAG_CATCH_UP`] for a catch-up copy, else zero.
+    pub flags: u32,
     /// Random id of the writer instance; a restarted writer has a new one.
     pub session: u64,
     /// Layer generation, or snapshot generation for a manifest.
@@ -212,7 +236,7 @@ impl SegmentHeader {
             version: PROTOCOL_VERSION,
             kind: kind as u16,
             layer_id,
-            reserved: 0,
+            flags: 0,
             session,
             generation,
             len,
@@ -251,12 +275,19 @@ pub enum SegmentError {
         /// The kind the service carries.
         expected: SegmentKind,
     },
-    /// A layer segment arrived on another layer's service.
-    #[error("segment for layer {found} arrived on the service of layer {expected}")]
+    /// The header's kind is neither a layer nor a manifest.
+    #[error("unknown segment kind {found}")]
+    UnknownKind {
+        /// The raw kind found.
+        found: u16,
+    },
+    /// The segment id does not fit the kind (a manifest must carry [`MANIFEST_LAYER_ID`], a
+    /// layer segment any other id), or is not the one expected.
+    #[error("segment id {found} where {expected} was expected")]
     LayerIdMismatch {
-        /// The layer of the service.
+        /// The id expected.
         expected: u32,
-        /// The layer in the header.
+        /// The id in the header.
         found: u32,
     },
     /// The header claims more bytes than the payload holds.
@@ -345,6 +376,37 @@ pub fn check_segment_header(
             payload: payload_bytes,
         }),
     }
+}
+
+/// Checks a segment received from a stream that carries both kinds: finds its kind, checks
+/// that a manifest carries [`MANIFEST_LAYER_ID`] (and a layer segment another id), then runs
+/// [`check_segment_header`]. Returns the kind and the meaningful length.
+///
+/// # Errors
+///
+/// [`SegmentError::UnknownKind`], [`SegmentError::LayerIdMismatch`] or any error of
+/// [`check_segment_header`].
+pub fn check_stream_header(
+    header: &SegmentHeader,
+    payload_bytes: usize,
+) -> Result<(SegmentKind, usize), SegmentError> {
+    if header.magic != SEGMENT_MAGIC {
+        return Err(SegmentError::BadMagic {
+            found: header.magic,
+        });
+    }
+    let kind = SegmentKind::from_raw(header.kind)
+        .ok_or(SegmentError::UnknownKind { found: header.kind })?;
+    let is_manifest_id = header.layer_id == MANIFEST_LAYER_ID;
+    if is_manifest_id != (kind == SegmentKind::Manifest) {
+        return Err(SegmentError::LayerIdMismatch {
+            expected: if is_manifest_id { 0 } else { MANIFEST_LAYER_ID },
+            found: header.layer_id,
+        });
+    }
+    let expected = is_manifest_id.then_some(MANIFEST_LAYER_ID);
+    let len = check_segment_header(header, kind, expected, payload_bytes)?;
+    Ok((kind, len))
 }
 
 /// One line of the transport-level manifest: which generation of a layer a snapshot uses.
@@ -501,14 +563,9 @@ impl SceneServices {
         &self.scene
     }
 
-    /// `ygg/<scene>/layer/<layer_id>`.
-    pub fn layer(&self, layer_id: u32) -> String {
-        format!("{SERVICE_ROOT}/{}/layer/{layer_id}", self.scene)
-    }
-
-    /// `ygg/<scene>/manifest`.
-    pub fn manifest(&self) -> String {
-        format!("{SERVICE_ROOT}/{}/manifest", self.scene)
+    /// `ygg/<scene>/segments`: every segment, in publish order, and catch-up bursts.
+    pub fn segments(&self) -> String {
+        format!("{SERVICE_ROOT}/{}/segments", self.scene)
     }
 
     /// `ygg/<scene>/events` (writer -> readers).
@@ -621,6 +678,32 @@ mod tests {
     }
 
     #[test]
+    fn stream_header_check_finds_the_kind() {
+        let layer = SegmentHeader::new(SegmentKind::Layer, 3, 1, 1, 100, 0);
+        assert_eq!(
+            check_stream_header(&layer, 128),
+            Ok((SegmentKind::Layer, 100))
+        );
+        let manifest = SegmentHeader::new(SegmentKind::Manifest, MANIFEST_LAYER_ID, 1, 1, 0, 0);
+        assert_eq!(
+            check_stream_header(&manifest, 128),
+            Ok((SegmentKind::Manifest, 0))
+        );
+        let mut bad = layer;
+        bad.kind = 9;
+        assert_eq!(
+            check_stream_header(&bad, 128),
+            Err(SegmentError::UnknownKind { found: 9 })
+        );
+        let mut bad = layer;
+        bad.layer_id = MANIFEST_LAYER_ID;
+        assert!(matches!(
+            check_stream_header(&bad, 128),
+            Err(SegmentError::LayerIdMismatch { .. })
+        ));
+    }
+
+    #[test]
     fn scene_names_are_checked() {
         assert!(SceneServices::new("office-1.a_b").is_ok());
         assert_eq!(SceneServices::new(""), Err(SceneNameError::Empty));
@@ -629,7 +712,6 @@ mod tests {
             Err(SceneNameError::InvalidCharacter { found: '/' })
         ));
         let s = SceneServices::new("s").expect("valid");
-        assert_eq!(s.layer(4), "ygg/s/layer/4");
-        assert_eq!(s.manifest(), "ygg/s/manifest");
+        assert_eq!(s.segments(), "ygg/s/segments");
     }
 }

@@ -29,6 +29,11 @@ pub struct DemoArgs {
     /// Writer update ticks per second.
     #[arg(long, default_value_t = 30.0)]
     pub rate: f64,
+    /// Also write the summary as JSON here (`readers`: per reader `visible_p50_us`,
+    /// `visible_p99_us`, `checked`, `matched`; `writer`: `update_us_mean`,
+    /// `publish_us_mean`, `updates_per_s`).
+    #[arg(long)]
+    pub json: Option<std::path::PathBuf>,
 }
 
 /// The reader roles (`ygg-bench role --role ...`), in the order `--readers` cycles.
@@ -260,6 +265,11 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         p.bar.finish();
     }
     print_summary(&procs, interrupted);
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&summary_json(&procs, args))?;
+        std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
     let failed: Vec<String> = procs
         .iter_mut()
         .filter_map(|p| {
@@ -357,6 +367,47 @@ fn print_summary(procs: &[Member], interrupted: bool) {
     }
     let (checked, matched) = checks(procs);
     println!("brute-force check: {matched} of {checked} sampled answers matched");
+}
+
+/// The summary as JSON: per reader its latencies and checks, the writer's means, and the
+/// machine and options of the run.
+fn summary_json(procs: &[Member], args: &DemoArgs) -> Value {
+    let readers: Vec<Value> = procs[1..]
+        .iter()
+        .map(|p| {
+            let s = p.summary.as_ref();
+            let get = |k: &str| s.map_or(Value::Null, |s| s[k].clone());
+            serde_json::json!({
+                "name": p.name,
+                "visible_p50_us": get("visible_p50_us"),
+                "visible_p99_us": get("visible_p99_us"),
+                "query_p50_us": get("query_p50_us"),
+                "query_p99_us": get("query_p99_us"),
+                "batches": get("batches"),
+                "checked": get("checked"),
+                "matched": get("matched"),
+            })
+        })
+        .collect();
+    let w = procs[0].summary.as_ref();
+    let get = |k: &str| w.map_or(Value::Null, |w| w[k].clone());
+    serde_json::json!({
+        "readers": readers,
+        "writer": {
+            "update_us_mean": get("update_us"),
+            "publish_us_mean": get("publish_us"),
+            "updates_per_s": get("updates_per_s"),
+            "rss_mb": get("rss_mb"),
+            "nodes": get("nodes"),
+        },
+        "options": {
+            "seconds": args.seconds,
+            "readers": args.readers,
+            "scale": args.scale,
+            "rate": args.rate,
+        },
+        "machine": crate::ladder::report::machine(),
+    })
 }
 
 /// Answers checked against brute force and answers that matched, over every summary.

@@ -75,6 +75,11 @@ impl ReaderProc {
     }
 
     /// Closes stdin: the reader's signal to exit cleanly.
+    /// The process id.
+    pub fn pid(&self) -> u32 {
+        self.proc.pid()
+    }
+
     pub fn close_stdin(&mut self) {
         self.proc.close_stdin();
     }

@@ -11,6 +11,7 @@
 //! answered on it. From `publish()` returning to visible is the transport-and-validation
 //! part alone.
 
+mod bare;
 pub(crate) mod cases;
 pub(crate) mod child;
 mod reader;
@@ -113,3 +114,10 @@ pub(crate) fn check_interrupted() -> Res<()> {
 
 /// Nanoseconds since the Unix epoch: the clock shared by the writer and its readers.
 pub(crate) use ygg_transport::protocol::unix_ns;
+
+/// CPU time the calling thread has used, ns (`CLOCK_THREAD_CPUTIME_ID`): what one reader
+/// spends, whatever else runs on the machine.
+pub(crate) fn thread_cpu_ns() -> u64 {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    u64::try_from(t.tv_sec).unwrap_or(0) * 1_000_000_000 + u64::try_from(t.tv_nsec).unwrap_or(0)
+}

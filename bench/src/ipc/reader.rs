@@ -4,9 +4,16 @@
 //! snapshot, then obeys lines on stdin; stdin closing means "exit cleanly".
 //!
 //! * `latency`: blocks in [`SceneReader::wait_next`]; for each new snapshot records the
-//!   generation, the Unix time it held the validated view and (with `--query-layer`)
-//!   the time a nearest-node query on it was answered. `report` prints the records as
-//!   `seen <gen> <visible> <answered>` lines and `end`.
+//!   generation, the Unix time it held the validated view, (with `--query-layer`) the
+//!   time a nearest-node query on it was answered, and the reader thread's CPU time from
+//!   the `wait_next` call that returned it to the view (wake-up, receive, validation,
+//!   view; not the query). `report` prints the records as `seen <gen> <visible>
+//!   <answered> <cpu ns>` lines and `end`.
+//! * `attach`: the attach-to-first-answer measurement: from the process's start, opens the
+//!   reader, waits for the first snapshot and answers a nearest-node query on it, then
+//!   prints `ready <gen> <start ns> <answered ns> <process CPU ns>` and idles until stdin
+//!   closes (so the benchmark can count its descriptors).
+//! * `bare`: the bare iceoryx2 subscriber of the physical floor ([`super::bare`]).
 //! * `qps`: on `start`, loops `latest()` + nearest-node query on the newest snapshot until
 //!   `stop`, then prints `qps <queries> <elapsed ns> <median ns> <p99 ns> <snapshots>`.
 //! * `q1a`: for the ladder's `after_update_ipc` rows: blocks in [`SceneReader::wait_next`];
@@ -19,7 +26,7 @@
 //!   <nodes>`.
 
 use super::socket::PlainGraph;
-use super::{Res, unix_ns};
+use super::{Res, thread_cpu_ns, unix_ns};
 use crate::ladder::answer_line::{AnswerLine, mesh_checksum};
 use crate::ladder::harness::Target;
 use crate::ladder::workload::Query;
@@ -80,10 +87,14 @@ pub enum Mode {
     Q1a,
     /// Deserialize frames from a Unix socket.
     Socket,
+    /// Time attaching to the first answer.
+    Attach,
+    /// The bare iceoryx2 subscriber.
+    Bare,
 }
 
 /// Commands from the writer.
-enum Cmd {
+pub(crate) enum Cmd {
     Report,
     Start,
     Stop,
@@ -92,6 +103,7 @@ enum Cmd {
 
 /// Runs the reader process.
 pub fn main(args: &ReaderArgs) -> Res<()> {
+    let started = unix_ns();
     // Die with the benchmark: SIGTERM (handled, so the reader still cleans up) when the
     // parent goes away, even if it was SIGKILLed.
     ygg_testkit::die_with_parent().map_err(|e| format!("cannot die with the benchmark: {e}"))?;
@@ -102,6 +114,40 @@ pub fn main(args: &ReaderArgs) -> Res<()> {
         Mode::Qps => qps(args, &commands),
         Mode::Q1a => q1a(args, &commands),
         Mode::Socket => socket(args),
+        Mode::Attach => attach_timed(args, started, &commands),
+        Mode::Bare => super::bare::subscriber_main(&args.scene, &args.prefix, &commands),
+    }
+}
+
+/// Prints and clears `records` as `seen` lines, then `end`.
+pub(crate) fn print_records(records: &mut Vec<[u64; 3]>) -> Res<()> {
+    let mut out = std::io::stdout().lock();
+    for [g, t, cpu] in records.drain(..) {
+        writeln!(out, "seen {g} {t} {t} {cpu}")?;
+    }
+    writeln!(out, "end")?;
+    out.flush()?;
+    Ok(())
+}
+
+/// Attaches, answers one query, reports the times and idles until told to exit.
+fn attach_timed(args: &ReaderArgs, started: u64, commands: &Receiver<Cmd>) -> Res<()> {
+    let layer = args
+        .query_layer
+        .as_deref()
+        .ok_or("attach mode needs --query-layer")?;
+    let (_reader, first) = attach(args)?;
+    std::hint::black_box(query(&first.view(), layer, &mut Points(1))?);
+    let answered = unix_ns();
+    let cpu = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
+    let cpu_ns = u64::try_from(cpu.tv_sec).unwrap_or(0) * 1_000_000_000
+        + u64::try_from(cpu.tv_nsec).unwrap_or(0);
+    println!("ready {} {started} {answered} {cpu_ns}", first.generation());
+    loop {
+        match commands.recv() {
+            Ok(Cmd::Exit) | Err(_) => return Ok(()),
+            Ok(_) => {}
+        }
     }
 }
 
@@ -169,14 +215,14 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
     println!("ready {}", first.generation());
     drop(first);
     let mut points = Points(args.index as u64 + 1);
-    // (generation, visible, answered)
-    let mut records: Vec<[u64; 3]> = Vec::with_capacity(4096);
+    // (generation, visible, answered, thread CPU ns of the wait that returned it)
+    let mut records: Vec<[u64; 4]> = Vec::with_capacity(4096);
     loop {
         match commands.try_recv() {
             Ok(Cmd::Report) => {
                 let mut out = std::io::stdout().lock();
-                for [g, v, a] in records.drain(..) {
-                    writeln!(out, "seen {g} {v} {a}")?;
+                for [g, v, a, cpu] in records.drain(..) {
+                    writeln!(out, "seen {g} {v} {a} {cpu}")?;
                 }
                 writeln!(out, "end")?;
                 out.flush()?;
@@ -184,10 +230,12 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
             Ok(Cmd::Exit) | Err(TryRecvError::Disconnected) => return Ok(()),
             Ok(Cmd::Start | Cmd::Stop) | Err(TryRecvError::Empty) => {}
         }
+        let cpu_before = thread_cpu_ns();
         match reader.wait_next(Duration::from_millis(20)) {
             Ok(Some(snapshot)) => {
                 let view = snapshot.view();
                 let visible = unix_ns();
+                let cpu = thread_cpu_ns() - cpu_before;
                 let generation = view.generation();
                 let answered = match &args.query_layer {
                     Some(layer) => {
@@ -196,7 +244,7 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
                     }
                     None => visible,
                 };
-                records.push([generation, visible, answered]);
+                records.push([generation, visible, answered, cpu]);
             }
             Ok(None) => {}
             Err(SceneReceiveError::Receive(ReceiveError::Terminated)) => return Ok(()),

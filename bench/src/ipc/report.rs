@@ -248,6 +248,104 @@ pub fn targets(rows: &[Row]) -> Vec<Target> {
             "writer throughput drop with 4 busy readers ≤ 10%",
         )),
     }
+    out.extend(floor_targets(rows));
+    out
+}
+
+/// Issue 19's transport targets: ratios to the bare iceoryx2 floor of the same run, reader
+/// CPU, readers fanning out, attaching on a few layers and on many.
+fn floor_targets(rows: &[Row]) -> Vec<Target> {
+    let find = |c: &str| rows.iter().find(|r| r.case == c);
+    let mut out = Vec::new();
+    out.push(match (find("layer_update_office"), find("bare_iceoryx2")) {
+        (Some(u), Some(b)) => {
+            let ratio = u.median_us / b.median_us;
+            Target {
+                text: "`layer_update_office` p50 ≤ 1.5× `bare_iceoryx2` p50 (same run)".into(),
+                measured: format!(
+                    "{ratio:.2}× ({} against {}; validated snapshot {}; {}; bare publish call {})",
+                    fmt_us(u.median_us),
+                    fmt_us(b.median_us),
+                    fmt_us(u.get("visible_median_us").unwrap_or(f64::NAN)),
+                    split(u),
+                    fmt_us(b.get("publish_call_us").unwrap_or(f64::NAN))
+                ),
+                met: Some(ratio <= 1.5),
+            }
+        }
+        _ => not_measured("`layer_update_office` p50 ≤ 1.5× `bare_iceoryx2` p50"),
+    });
+    out.push(match find("layer_update_office") {
+        Some(u) => {
+            let cpu = u.get("reader_cpu_us").unwrap_or(f64::NAN);
+            let bare = find("bare_iceoryx2").and_then(|b| b.get("reader_cpu_us"));
+            Target {
+                text: "per-reader CPU per single-layer update ≤ 15 µs (thread CPU time)".into(),
+                measured: format!(
+                    "{} per update (wake-up, receive, validation, view; the bare subscriber's wake-up and receive: {})",
+                    fmt_us(cpu),
+                    bare.map_or("–".into(), fmt_us)
+                ),
+                met: Some(cpu <= 15.0),
+            }
+        }
+        None => not_measured("per-reader CPU per single-layer update ≤ 15 µs"),
+    });
+    out.push(match (find("readers_1"), find("readers_8")) {
+        (Some(one), Some(eight)) => {
+            let ratio = eight.median_us / one.median_us;
+            Target {
+                text: "8 readers: the slowest reader's p50 ≤ 2× the p50 with one".into(),
+                measured: format!(
+                    "{ratio:.2}× ({} against {})",
+                    fmt_us(eight.median_us),
+                    fmt_us(one.median_us)
+                ),
+                met: Some(ratio <= 2.0),
+            }
+        }
+        _ => not_measured("8 readers: the slowest reader's p50 ≤ 2× the p50 with one"),
+    });
+    out.extend(match (find("attach_office"), find("attach_office103")) {
+        (Some(a), Some(b)) => {
+            let worst = a.median_us.max(b.median_us);
+            let within = |k: &str| {
+                let (x, y) = (a.get(k).unwrap_or(f64::NAN), b.get(k).unwrap_or(f64::NAN));
+                x.max(y) / x.min(y)
+            };
+            let ratios = [within("writer_fds"), within("reader_fds"), within("shm_files")];
+            let line = |r: &Row| {
+                format!(
+                    "{} layers: attach p50 {} (from spawn {}; the reader process's CPU time to its answer {}), writer {} fds, reader {} fds, {} /dev/shm files",
+                    r.get("layers").unwrap_or(f64::NAN),
+                    fmt_us(r.median_us),
+                    fmt_us(r.get("from_spawn_median_us").unwrap_or(f64::NAN)),
+                    fmt_us(r.get("process_cpu_us").unwrap_or(f64::NAN)),
+                    r.get("writer_fds").unwrap_or(f64::NAN),
+                    r.get("reader_fds").unwrap_or(f64::NAN),
+                    r.get("shm_files").unwrap_or(f64::NAN)
+                )
+            };
+            vec![
+                Target {
+                    text: "attach to first answer ≤ 20 ms on the office and on the 103-room office".into(),
+                    measured: format!("{}; {}", line(a), line(b)),
+                    met: Some(worst <= 20_000.0),
+                },
+                Target {
+                    text: "fds and /dev/shm files per process within 1.5× between the two offices".into(),
+                    measured: format!(
+                        "ratios writer fds {:.2}, reader fds {:.2}, files {:.2}",
+                        ratios[0], ratios[1], ratios[2]
+                    ),
+                    met: Some(ratios.iter().all(|r| *r <= 1.5)),
+                },
+            ]
+        }
+        _ => vec![not_measured(
+            "attach to first answer ≤ 20 ms on the office and on the 103-room office",
+        )],
+    });
     out
 }
 

@@ -6,6 +6,10 @@ use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::office::{OfficeParams, generate};
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView};
 
+/// Rooms of the many-layer office: the built-in office split into 103 rooms (418 layers in
+/// mint), a realistic large building.
+pub const MANY_ROOMS: usize = 103;
+
 /// The built-in office at `scale` (seed 7), as imported Spark-DSG data.
 pub fn office_dsg(scale: f64) -> DsgGraph {
     generate(OfficeParams { seed: 7, scale })
@@ -14,6 +18,17 @@ pub fn office_dsg(scale: f64) -> DsgGraph {
 /// The office in `layout`.
 pub fn office(dsg: &DsgGraph, layout: Layout) -> Res<SceneGraph> {
     Ok(layout::build(dsg, layout)?)
+}
+
+/// Bytes of the archived segment of the office's `AGENTS` layer.
+pub fn agents_segment_bytes(g: &SceneGraph) -> Res<usize> {
+    let agents = layout::layer_with_role(g, layout::LayerRole::Agents)
+        .ok_or("the office has no AGENTS layer")?;
+    let index = g
+        .layers()
+        .position(|l| l == agents)
+        .ok_or("AGENTS is not among the layers")?;
+    Ok(g.to_segments().1[index].len())
 }
 
 /// Bytes of the whole archived graph (manifest and every layer).

@@ -38,7 +38,8 @@
 //! The fixed floor plan and label table in `plan.rs`; the random stream in
 //! `sampling.rs`; [`generate`]'s steps in `steps.rs`, which calls the objects
 //! (`objects.rs`), the mesh (`mesh.rs`) and places, poses and edges (`places.rs`), with
-//! the point grid of `grid.rs`.
+//! the point grid of `grid.rs`. [`split_rooms`] (`split.rs`) turns the office into a larger
+//! building of more, smaller rooms (the 103-room office of the transport benchmark).
 
 mod grid;
 mod mesh;
@@ -46,10 +47,13 @@ mod objects;
 mod places;
 mod plan;
 mod sampling;
+mod split;
 mod steps;
 
 #[doc(inline)]
 pub use self::plan::{CEILING, DOORS, ROOMS, label_names, room_at};
+#[doc(inline)]
+pub use self::split::{SplitRoomsError, split_rooms};
 
 use self::sampling::Gen;
 use crate::model::DsgGraph;

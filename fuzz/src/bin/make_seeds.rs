@@ -50,7 +50,7 @@ fn header(kind: SegmentKind, layer_id: u32, generation: u64, len: usize) -> Vec<
     out.extend_from_slice(&h.version.to_le_bytes());
     out.extend_from_slice(&h.kind.to_le_bytes());
     out.extend_from_slice(&h.layer_id.to_le_bytes());
-    out.extend_from_slice(&h.reserved.to_le_bytes());
+    out.extend_from_slice(&h.flags.to_le_bytes());
     out.extend_from_slice(&h.session.to_le_bytes());
     out.extend_from_slice(&h.generation.to_le_bytes());
     out.extend_from_slice(&h.len.to_le_bytes());

@@ -50,11 +50,12 @@ pub enum PublishError {
         #[source]
         source: std::io::Error,
     },
-    /// The layer id is reserved for manifests.
+    /// The segment id is reserved for manifests.
     #[error("layer id {0} is reserved")]
     ReservedLayerId(u32),
-    /// A manifest names more layers than the protocol allows.
-    #[error("a manifest may name at most {max} layers, this one names {count}")]
+    /// A manifest names more segments than the writer was built for
+    /// ([`PublisherBuilder::max_segments`](crate::PublisherBuilder::max_segments)).
+    #[error("a manifest may name at most {max} segments, this one names {count}")]
     TooManyLayers {
         /// Layers named.
         count: usize,
@@ -87,9 +88,6 @@ pub enum PublishError {
         /// The requested length.
         len: usize,
     },
-    /// The layer's service could not be created on first use.
-    #[error(transparent)]
-    Create(#[from] WriterCreateError),
     /// iceoryx2 could not loan a sample.
     #[error("cannot loan a sample on {service:?}: {source}")]
     Loan {

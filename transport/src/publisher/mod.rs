@@ -2,7 +2,10 @@
 
 mod error;
 mod heap;
+mod helper;
 mod loan;
+mod ports;
+mod retained;
 mod segment_publisher;
 pub mod shm;
 

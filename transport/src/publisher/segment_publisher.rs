@@ -5,36 +5,30 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, SystemTime};
 
 use crate::SetupError;
 use crate::protocol::{
-    self, BLOCK_SIZE, Block128, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, EVENT_ID_MAX,
-    EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP,
-    HISTORY_SIZE, Ipc, MANIFEST_LAYER_ID, MAX_LAYERS, ManifestEntry, PUBLISHER_MAX_LOANED,
-    SUBSCRIBER_BUFFER_SIZE, SUBSCRIBER_MAX_BORROWED, SceneServices, SegmentHeader, SegmentKind,
+    self, BLOCK_SIZE, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS,
+    EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP, Ipc, MANIFEST_LAYER_ID,
+    ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
 };
-use iceoryx2::config::Config;
 use iceoryx2::node::NodeWaitFailure;
-use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
-use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::update_connections::UpdateConnections;
-use iceoryx2::prelude::{AllocationStrategy, CallbackProgression, EventId, Node, NodeState};
+use iceoryx2::prelude::{EventId, Node};
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
-use super::{PublishError, WriterCreateError, WriterWaitError, loan, shm};
-
-type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
-type SegmentPort = Publisher<Ipc, [Block128], SegmentHeader>;
+use super::helper::Helper;
+use super::ports::{
+    PortSettings, SegmentService, open_event_service, open_segment_port, send_segment,
+};
+use super::retained::{Retained, RetainedSample};
+use super::{PublishError, WriterCreateError, WriterWaitError};
 
 /// Default initial capacity of a segment before iceoryx2 grows it (power-of-two steps).
 pub const DEFAULT_INITIAL_SEGMENT_BYTES: usize = 64 * 1024;
-
-/// How often the helper thread removes resources of dead readers.
-const CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
 
 /// Configures and creates a [`SegmentPublisher`].
 ///
@@ -51,6 +45,7 @@ const CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
 pub struct PublisherBuilder {
     scene: String,
     max_readers: usize,
+    max_segments: usize,
     initial_segment_bytes: usize,
     shm_dir: PathBuf,
     iceoryx_prefix: Option<String>,
@@ -63,6 +58,7 @@ impl PublisherBuilder {
         Self {
             scene: scene.to_owned(),
             max_readers: DEFAULT_MAX_READERS,
+            max_segments: DEFAULT_MAX_SEGMENTS,
             initial_segment_bytes: DEFAULT_INITIAL_SEGMENT_BYTES,
             shm_dir: PathBuf::from(protocol::DEFAULT_SHM_DIR),
             iceoryx_prefix: None,
@@ -72,13 +68,23 @@ impl PublisherBuilder {
 
     /// Readers the scene supports at once (default [`DEFAULT_MAX_READERS`]).
     ///
-    /// On create this sizes every service; each extra reader costs
-    /// `SUBSCRIBER_BUFFER_SIZE + SUBSCRIBER_MAX_BORROWED` more chunks of address space per
-    /// segment pool (tmpfs pages are used only when written). A restarted writer that asks for
-    /// more readers than the existing services support fails with
-    /// [`SetupError::Service`](crate::SetupError::Service) while readers keep those services alive.
+    /// On create this sizes the segment stream; each extra reader costs about
+    /// `3 * max_segments` more chunks of address space (tmpfs pages are used only when
+    /// written). A restarted writer that asks for more readers than the existing services
+    /// support fails with [`SetupError::Service`](crate::SetupError::Service) while readers
+    /// keep those services alive.
     pub fn max_readers(mut self, value: usize) -> Self {
         self.max_readers = value.max(1);
+        self
+    }
+
+    /// Most segments one snapshot may name (default [`DEFAULT_MAX_SEGMENTS`]); a manifest
+    /// naming more is refused with [`PublishError::TooManyLayers`]. Sizes the segment
+    /// stream's pool (address space, see [`protocol::stream_max_borrowed`]); like
+    /// `max_readers`, a restarted writer must not ask for more than the services it reopens
+    /// were created with.
+    pub fn max_segments(mut self, value: usize) -> Self {
+        self.max_segments = value.clamp(1, protocol::MAX_LAYERS);
         self
     }
 
@@ -129,9 +135,16 @@ impl PublisherBuilder {
 
         let settings = PortSettings {
             max_readers: self.max_readers,
+            max_segments: self.max_segments,
             initial_blocks: self.initial_segment_bytes.div_ceil(BLOCK_SIZE),
         };
-        let manifest = open_segment_port(&node, &services.manifest(), settings)?;
+        let stream_name = services.segments();
+        let stream = open_segment_port(&node, &stream_name, settings)?;
+        let own_subscriber = stream
+            .service
+            .subscriber_builder()
+            .create()
+            .map_err(|e| crate::service::port_failure(&stream_name, e))?;
 
         let events_name = services.events();
         let events = open_event_service(&node, &events_name, self.max_readers, true)?;
@@ -143,7 +156,7 @@ impl PublisherBuilder {
 
         let readers_name = services.readers();
         let readers = open_event_service(&node, &readers_name, self.max_readers, false)?;
-        let hello_listener = readers
+        let listener = readers
             .listener_builder()
             .create()
             .map_err(|e| crate::service::port_failure(&readers_name, e))?;
@@ -154,26 +167,33 @@ impl PublisherBuilder {
             .map_err(|e| crate::service::port_failure(&readers_name, e))?;
 
         let inner = Arc::new(Mutex::new(Inner {
-            ports: BTreeMap::from([(MANIFEST_LAYER_ID, manifest)]),
+            stream: Some(Stream {
+                port: stream,
+                retained: Retained::new(own_subscriber),
+            }),
             events_notifier,
             _events: events,
         }));
         let stop = Arc::new(AtomicBool::new(false));
+        let helper = Helper {
+            listener,
+            shm_dir: self.shm_dir.clone(),
+            interval: self.liveness_interval,
+            config: config.clone(),
+        };
         let helper = std::thread::Builder::new()
             .name(format!("ygg-writer-{}", services.scene()))
             .spawn({
                 let inner = Arc::clone(&inner);
                 let stop = Arc::clone(&stop);
-                let interval = self.liveness_interval;
-                let config = config.clone();
-                move || helper_loop(&inner, &hello_listener, &stop, interval, &config)
+                move || helper.run(&inner, &stop)
             })
             .map_err(WriterCreateError::Thread)?;
 
         Ok(SegmentPublisher {
             session: new_session_id(),
             shm_dir: self.shm_dir,
-            settings,
+            max_segments: self.max_segments,
             services,
             published: BTreeMap::new(),
             cut_started_unix_ns: None,
@@ -187,62 +207,87 @@ impl PublisherBuilder {
     }
 }
 
-#[derive(Debug, Clone, Copy)]
-struct PortSettings {
-    max_readers: usize,
-    initial_blocks: usize,
-}
-
-/// A publisher port with the service it belongs to.
-struct SegmentService {
-    name: String,
-    publisher: SegmentPort,
-    service: SegmentFactory,
+/// The segment stream's publisher and the writer's hold on what it sent.
+struct Stream {
+    port: SegmentService,
+    retained: Retained,
 }
 
 /// State shared with the helper thread.
-struct Inner {
-    /// Publisher ports by layer id; the manifest's under [`MANIFEST_LAYER_ID`].
-    ports: BTreeMap<u32, SegmentService>,
+pub(crate) struct Inner {
+    /// `None` once the writer is closing.
+    stream: Option<Stream>,
     events_notifier: Notifier<Ipc>,
     _events: EventFactory<Ipc>,
 }
 
 impl Inner {
-    /// Connects new subscribers and hands them the history (the newest sample of each service).
-    fn update_connections(&self) {
-        for service in self.ports.values() {
-            // A failing connection is retried on the next publish; nothing to report here.
-            let _ = service.publisher.update_connections();
+    /// Connects new subscribers to the segment stream.
+    pub(crate) fn update_connections(&self) {
+        if let Some(stream) = &self.stream {
+            // A failing connection is retried on the next send; nothing to report here.
+            let _ = stream.port.publisher.update_connections();
         }
     }
 
-    /// Readers connected to the scene now (the manifest's subscribers).
-    fn reader_count(&self) -> usize {
-        self.ports
-            .get(&MANIFEST_LAYER_ID)
-            .map_or(0, |s| s.service.dynamic_config().number_of_subscribers())
+    /// Readers connected to the scene now (the stream's subscribers but the writer's own).
+    pub(crate) fn reader_count(&self) -> usize {
+        self.stream.as_ref().map_or(0, |s| {
+            s.port
+                .service
+                .dynamic_config()
+                .number_of_subscribers()
+                .saturating_sub(1)
+        })
     }
 
-    fn notify(&self, event: EventId) {
+    /// Sends a catch-up copy of `sample` on the stream (and drops the writer's own copy of
+    /// it at once).
+    pub(crate) fn send_copy(
+        &mut self,
+        sample: &RetainedSample,
+        shm_dir: &std::path::Path,
+    ) -> Result<(), PublishError> {
+        let stream = self.stream.as_mut().ok_or(PublishError::Closed)?;
+        let mut header = *sample.header();
+        header.flags |= protocol::FLAG_CATCH_UP;
+        let bytes = sample.bytes();
+        send_segment(&stream.port, shm_dir, header, bytes.len(), |buf| {
+            buf.copy_from_slice(bytes);
+            Ok::<_, std::convert::Infallible>(())
+        })?;
+        stream.retained.receive(None);
+        Ok(())
+    }
+
+    /// The samples of the current snapshot, its manifest last (empty before the first).
+    pub(crate) fn current_snapshot(&self) -> Vec<RetainedSample> {
+        self.stream
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.retained.snapshot())
+    }
+
+    pub(crate) fn notify(&self, event: EventId) {
         // Readers without a listener (or none at all) are no error for the writer.
         let _ = self.events_notifier.notify_with_custom_event_id(event);
     }
 }
 
-/// Publishes one scene's segments: per-layer byte segments and a manifest naming a consistent
-/// cut of them (DESIGN.md §5).
+/// Publishes one scene's segments: byte segments (a layer, or a chunk of one: the id is
+/// opaque here) and a manifest naming a consistent cut of them (DESIGN.md §5), all over one
+/// stream service whatever the number of segments.
 ///
-/// Call [`publish_layer`](Self::publish_layer) for every changed layer, then
-/// [`publish_manifest`](Self::publish_manifest) naming the generation of every layer of the
-/// snapshot. Publishing never blocks on readers: slow readers lose intermediate samples
-/// (safe overflow), and a reader holding samples only holds its own share of the pool.
+/// Call [`publish_layer`](Self::publish_layer) for every changed segment, then
+/// [`publish_manifest`](Self::publish_manifest) naming the generation of every segment of the
+/// snapshot. Publishing never blocks on readers: slow readers lose their oldest buffered
+/// samples (safe overflow) and catch up from a burst of the current snapshot, and a reader
+/// holding samples only holds its own share of the pool.
 ///
 /// Dropping the writer tells readers it is gone and removes its shared memory.
 pub struct SegmentPublisher {
     session: u64,
     shm_dir: PathBuf,
-    settings: PortSettings,
+    max_segments: usize,
     services: SceneServices,
     /// Last generation published per layer, to check manifests.
     published: BTreeMap<u32, u64>,
@@ -288,8 +333,6 @@ impl SegmentPublisher {
     /// `fill` gets the loaned shared-memory buffer of exactly `len` bytes (starting 128-byte
     /// aligned) and must write all of it: its previous content is unspecified. No copy is made.
     /// Readers see the layer only once a manifest names this generation.
-    ///
-    /// The layer's service is created on first use.
     ///
     /// # Errors
     ///
@@ -337,14 +380,9 @@ impl SegmentPublisher {
             self.cut_started_unix_ns.unwrap_or_default(),
         );
         let mut inner = lock(&self.inner);
-        let service =
-            match inner.ports.entry(layer_id) {
-                std::collections::btree_map::Entry::Occupied(entry) => entry.into_mut(),
-                std::collections::btree_map::Entry::Vacant(entry) => entry.insert(
-                    open_segment_port(&self.node, &self.services.layer(layer_id), self.settings)?,
-                ),
-            };
-        send_segment(service, &self.shm_dir, header, len, fill)?;
+        let stream = inner.stream.as_mut().ok_or(PublishError::Closed)?;
+        send_segment(&stream.port, &self.shm_dir, header, len, fill)?;
+        stream.retained.receive(None);
         drop(inner);
         self.published.insert(layer_id, generation);
         Ok(())
@@ -390,10 +428,10 @@ impl SegmentPublisher {
     where
         E: Into<Box<dyn std::error::Error + Send + Sync>>,
     {
-        if entries.len() > MAX_LAYERS {
+        if entries.len() > self.max_segments {
             return Err(PublishError::TooManyLayers {
                 count: entries.len(),
-                max: MAX_LAYERS,
+                max: self.max_segments,
             });
         }
         for pair in entries.windows(2) {
@@ -426,16 +464,14 @@ impl SegmentPublisher {
             total as u64,
             self.cut_started_unix_ns.take().unwrap_or_default(),
         );
-        let inner = lock(&self.inner);
-        let manifest = inner
-            .ports
-            .get(&MANIFEST_LAYER_ID)
-            .ok_or(PublishError::Closed)?;
-        send_segment(manifest, &self.shm_dir, header, total, |buf| {
+        let mut inner = lock(&self.inner);
+        let stream = inner.stream.as_mut().ok_or(PublishError::Closed)?;
+        send_segment(&stream.port, &self.shm_dir, header, total, |buf| {
             let (prefix, rest) = buf.split_at_mut(prefix_len);
             protocol::encode_manifest_prefix(entries, prefix);
             fill(rest)
         })?;
+        stream.retained.receive(Some(entries));
         inner.notify(EVENT_SNAPSHOT_PUBLISHED);
         Ok(())
     }
@@ -449,11 +485,12 @@ impl SegmentPublisher {
             .get_or_insert_with(protocol::unix_ns);
     }
 
-    /// Stops publishing `layer_id` and removes its service once no reader holds it. Publish a
-    /// manifest without the layer first.
+    /// Stops publishing segment `layer_id`: the writer lets go of its last sample, whose
+    /// shared memory is reused once no reader holds it. Publish a manifest without the
+    /// segment first.
     pub fn retire_layer(&mut self, layer_id: u32) {
-        if layer_id != MANIFEST_LAYER_ID {
-            lock(&self.inner).ports.remove(&layer_id);
+        if let Some(stream) = &mut lock(&self.inner).stream {
+            stream.retained.forget(layer_id);
         }
         self.published.remove(&layer_id);
     }
@@ -476,12 +513,13 @@ impl SegmentPublisher {
         })
     }
 
-    /// Delivers the newest segments to readers that connected since the last publish. The
-    /// helper thread does this when a reader announces itself; calling it is never required.
+    /// Sends the current snapshot to readers that connected since the last publish (a
+    /// catch-up burst from the helper thread). The helper does this when a reader announces
+    /// itself; calling it is never required.
     pub fn update_connections(&self) {
-        let inner = lock(&self.inner);
-        inner.update_connections();
-        inner.notify(EVENT_SNAPSHOT_PUBLISHED);
+        let _ = self
+            .stop_notifier
+            .notify_with_custom_event_id(protocol::EVENT_READER_HELLO);
     }
 }
 
@@ -495,179 +533,16 @@ impl Drop for SegmentPublisher {
             let _ = helper.join();
         }
         let mut inner = lock(&self.inner);
-        // Remove the publishers first: readers that get the event then see no publisher.
-        inner.ports.clear();
+        // Remove the publisher first: readers that get the event then see no publisher.
+        inner.stream = None;
         inner.notify(EVENT_WRITER_GONE);
     }
 }
 
-fn lock(inner: &Mutex<Inner>) -> MutexGuard<'_, Inner> {
+/// The state shared with the helper thread, locked.
+pub(crate) fn lock(inner: &Mutex<Inner>) -> MutexGuard<'_, Inner> {
     // A panic in the helper thread leaves the ports intact; keep using them.
     inner.lock().unwrap_or_else(PoisonError::into_inner)
-}
-
-/// Loans, fills and sends one segment after checking shared-memory space.
-fn send_segment<E>(
-    service: &SegmentService,
-    shm_dir: &std::path::Path,
-    header: SegmentHeader,
-    len: usize,
-    fill: impl FnOnce(&mut [u8]) -> Result<(), E>,
-) -> Result<(), PublishError>
-where
-    E: Into<Box<dyn std::error::Error + Send + Sync>>,
-{
-    let blocks = protocol::blocks_for(len).max(1);
-    let payload_bytes = blocks
-        .checked_mul(BLOCK_SIZE)
-        .ok_or(PublishError::TooLarge { len })?;
-    shm::ensure_free(shm_dir, payload_bytes as u64)?;
-    let mut sample = service
-        .publisher
-        .loan_slice_uninit(blocks)
-        .map_err(|source| PublishError::Loan {
-            service: service.name.clone(),
-            source,
-        })?;
-    *sample.user_header_mut() = header;
-    let sample = loan::fill_sample(sample, len, fill).map_err(|e| PublishError::Fill(e.into()))?;
-    sample.send().map_err(|source| PublishError::Send {
-        service: service.name.clone(),
-        source,
-    })?;
-    Ok(())
-}
-
-/// Opens or creates a segment service with the never-block QoS and claims its only publisher.
-fn open_segment_port(
-    node: &Node<Ipc>,
-    name: &str,
-    settings: PortSettings,
-) -> Result<SegmentService, WriterCreateError> {
-    let service = node
-        .service_builder(&crate::service::service_name(name)?)
-        .publish_subscribe::<[Block128]>()
-        .user_header::<SegmentHeader>()
-        .max_publishers(1)
-        .max_subscribers(settings.max_readers)
-        .max_nodes(settings.max_readers + 2)
-        .history_size(HISTORY_SIZE)
-        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER_SIZE)
-        .subscriber_max_borrowed_samples(SUBSCRIBER_MAX_BORROWED)
-        .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))?;
-    let publisher = service
-        .publisher_builder()
-        .max_loaned_samples(PUBLISHER_MAX_LOANED)
-        .initial_max_slice_len(settings.initial_blocks)
-        .allocation_strategy(AllocationStrategy::PowerOfTwo)
-        .create()
-        .map_err(|e| match e {
-            PublisherCreateError::ExceedsMaxSupportedPublishers => {
-                WriterCreateError::AlreadyRunning {
-                    scene: scene_of(name),
-                }
-            }
-            e => crate::service::port_failure(name, e).into(),
-        })?;
-    Ok(SegmentService {
-        name: name.to_owned(),
-        publisher,
-        service,
-    })
-}
-
-/// `ygg/<scene>/...` -> `<scene>`.
-fn scene_of(service: &str) -> String {
-    service.split('/').nth(1).unwrap_or(service).to_owned()
-}
-
-/// Opens or creates an event service. On the writer -> readers service, a writer that drops
-/// or is found dead emits [`EVENT_WRITER_GONE`].
-fn open_event_service(
-    node: &Node<Ipc>,
-    name: &str,
-    max_readers: usize,
-    to_readers: bool,
-) -> Result<EventFactory<Ipc>, WriterCreateError> {
-    let mut builder = node
-        .service_builder(&crate::service::service_name(name)?)
-        .event()
-        .max_nodes(max_readers + 2)
-        .max_listeners(max_readers + 2)
-        .max_notifiers(max_readers + 2)
-        .event_id_max_value(EVENT_ID_MAX);
-    if to_readers {
-        builder = builder
-            .notifier_dead_event(EVENT_WRITER_GONE)
-            .notifier_dropped_event(EVENT_WRITER_GONE);
-    }
-    builder
-        .open_or_create()
-        .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))
-}
-
-/// Answers reader announcements, removes resources of dead readers and drops connections of
-/// departed ones until `stop` is set.
-fn helper_loop(
-    inner: &Mutex<Inner>,
-    listener: &Listener<Ipc>,
-    stop: &AtomicBool,
-    interval: Duration,
-    config: &Config,
-) {
-    let mut last_cleanup = Instant::now();
-    let mut readers_before = lock(inner).reader_count();
-    while !stop.load(Ordering::SeqCst) {
-        let mut hello = false;
-        let waited = listener.timed_wait(
-            |activation| hello |= activation.id == EVENT_READER_HELLO,
-            interval,
-        );
-        if stop.load(Ordering::SeqCst) {
-            break;
-        }
-        if waited.is_err() {
-            // Interrupted by a signal or a broken listener: do not spin.
-            std::thread::sleep(interval.min(Duration::from_millis(50)));
-        }
-        if hello {
-            let inner = lock(inner);
-            inner.update_connections();
-            inner.notify(EVENT_SNAPSHOT_PUBLISHED);
-        }
-        if last_cleanup.elapsed() >= CLEANUP_INTERVAL {
-            cleanup_dead_nodes(config);
-            // Drops the connections (shared-memory files and descriptors) of readers that
-            // left or died; a layer that is not republished would otherwise keep them
-            // until the next reader announces itself.
-            let readers = {
-                let inner = lock(inner);
-                inner.update_connections();
-                inner.reader_count()
-            };
-            // A reader left or died (and whoever noticed first, a reader or this thread,
-            // removed its resources): give the heap that freed back.
-            if readers < readers_before {
-                super::heap::release_free_heap();
-            }
-            readers_before = readers;
-            last_cleanup = Instant::now();
-        }
-    }
-}
-
-/// Removes the resources of dead processes (readers killed without cleanup), freeing their
-/// subscriber slots and the samples they held.
-fn cleanup_dead_nodes(config: &Config) {
-    let _ = Node::<Ipc>::list(config, |state| {
-        if let NodeState::Dead(view) = state {
-            // Another process may be cleaning up the same node; that is fine.
-            let _ = view.try_remove_stale_resources();
-        }
-        CallbackProgression::Continue
-    });
 }
 
 /// A new, practically unique writer session id (time and pid, mixed).

@@ -60,9 +60,6 @@ pub enum ReceiveError {
         /// iceoryx2's description.
         reason: String,
     },
-    /// A layer named by a manifest could not be subscribed to.
-    #[error(transparent)]
-    Open(#[from] ReaderOpenError),
     /// Waiting for events failed.
     #[error("waiting for events failed: {reason}")]
     Wait {

@@ -1,8 +1,10 @@
 //! The reader side: attaching to a scene and assembling consistent snapshots of its
 //! segments.
 
+mod assembly;
 mod error;
 mod segment;
+pub(crate) use segment::HeldSegment;
 mod segment_subscriber;
 mod snapshot;
 

@@ -11,7 +11,7 @@ use iceoryx2::sample::Sample;
 
 use crate::protocol::{
     BLOCK_SIZE, Block128, Ipc, SEGMENT_ALIGN, SegmentError, SegmentHeader, SegmentKind,
-    check_segment_header,
+    check_stream_header,
 };
 
 /// A received iceoryx2 sample of segment blocks.
@@ -21,6 +21,7 @@ pub(crate) type SegmentSample = Sample<Ipc, [Block128], SegmentHeader>;
 pub(crate) struct HeldSegment {
     ptr: *const u8,
     len: usize,
+    kind: SegmentKind,
     header: SegmentHeader,
     _sample: SegmentSample,
 }
@@ -34,18 +35,14 @@ unsafe impl Send for HeldSegment {}
 unsafe impl Sync for HeldSegment {}
 
 impl HeldSegment {
-    /// Checks the sample's header against the service and payload size, copying the header
-    /// once so that later changes in shared memory cannot invalidate the check.
-    pub(crate) fn new(
-        sample: SegmentSample,
-        kind: SegmentKind,
-        layer: Option<u32>,
-    ) -> Result<Self, SegmentError> {
+    /// Checks the sample's header (kind, id, length against the payload size), copying the
+    /// header once so that later changes in shared memory cannot invalidate the check.
+    pub(crate) fn new(sample: SegmentSample) -> Result<Self, SegmentError> {
         let header = *sample.user_header();
         let blocks: &[Block128] = sample.payload();
         let ptr = blocks.as_ptr().cast::<u8>();
         let payload_bytes = blocks.len() * BLOCK_SIZE;
-        let len = check_segment_header(&header, kind, layer, payload_bytes)?;
+        let (kind, len) = check_stream_header(&header, payload_bytes)?;
         // `Block128` is 128-aligned, so a misaligned payload would be an iceoryx2 bug; checked
         // anyway because the archives inside rely on it.
         if !ptr.addr().is_multiple_of(SEGMENT_ALIGN) {
@@ -56,6 +53,7 @@ impl HeldSegment {
         Ok(Self {
             ptr,
             len,
+            kind,
             header,
             _sample: sample,
         })
@@ -73,6 +71,16 @@ impl HeldSegment {
     /// The header as received.
     pub(crate) fn header(&self) -> &SegmentHeader {
         &self.header
+    }
+
+    /// What the segment carries.
+    pub(crate) fn kind(&self) -> SegmentKind {
+        self.kind
+    }
+
+    /// `(session, generation)`: which publish of its segment id this is.
+    pub(crate) fn version(&self) -> (u64, u64) {
+        (self.header.session, self.header.generation)
     }
 }
 

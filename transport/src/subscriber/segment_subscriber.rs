@@ -1,9 +1,8 @@
 //! [`SubscriberBuilder`] and [`SegmentSubscriber`]: attaching to a scene and assembling
 //! consistent snapshots.
 
-use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Weak};
 use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
@@ -18,14 +17,16 @@ use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use iceoryx2_bb_posix::signal::SignalHandler;
 
-use super::segment::{HeldSegment, SegmentSample};
-use super::snapshot::{Snapshot, SnapshotLayer};
+use super::assembly::Assembly;
+use super::segment::HeldSegment;
+use super::snapshot::Snapshot;
 use super::{ReaderOpenError, ReceiveError};
 use crate::SetupError;
 use crate::protocol::{
     self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
-    ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
+    SceneServices, SegmentHeader,
 };
 
 type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
@@ -39,9 +40,9 @@ const WRITER_APPEARS_CHECK: Duration = Duration::from_millis(20);
 const FAST_CHECK: Duration = Duration::from_millis(5);
 /// How long the fast checks go on after a writer-gone event.
 const FAST_CHECK_WINDOW: Duration = Duration::from_millis(250);
-/// Received layer segments kept per layer beyond the current snapshot's: the subscriber
-/// buffer size, i.e. one publish racing the read (DESIGN.md §5).
-const MAX_PENDING: usize = protocol::SUBSCRIBER_BUFFER_SIZE;
+/// How long a reader waits for the catch-up burst it asked for before it asks again (the
+/// writer skips a burst when shared memory is short).
+const CATCH_UP_RETRY: Duration = Duration::from_millis(100);
 
 /// Configures and opens a [`SegmentSubscriber`].
 ///
@@ -152,7 +153,7 @@ impl SubscriberBuilder {
             .listener_builder()
             .create()
             .map_err(|e| crate::service::port_failure(&services.events(), e))?;
-        let manifest = open_segment_sub(&node, &services, &services.manifest())?;
+        let stream = open_segment_sub(&node, &services, &services.segments())?;
         let readers_service = open_event_service(&node, &services, &services.readers())?;
         let hello = readers_service
             .notifier_builder()
@@ -166,13 +167,12 @@ impl SubscriberBuilder {
             liveness_interval: self.liveness_interval,
             handle_signals: self.handle_termination_signals,
             terminated: AtomicBool::new(false),
-            manifest,
-            layers: BTreeMap::new(),
-            pending_manifest: None,
-            current: None,
-            retired: None,
+            stream,
+            assembly: Assembly::default(),
+            catch_up_asked: None,
             delivered: None,
             status: WriterStatus::Unknown,
+            gone_session: None,
             gone_unreported: false,
             next_liveness_check: Instant::now(),
             fast_checks_until: None,
@@ -199,32 +199,22 @@ pub enum WriterStatus {
     Gone,
 }
 
-/// A subscription to one layer's service, with samples received but not yet used.
-struct LayerPort {
-    port: SubPort,
-    /// Received segments newer than the current snapshot's, oldest first.
-    pending: Vec<Arc<HeldSegment>>,
-}
-
+/// A subscriber port with its service.
 struct SubPort {
     name: String,
     subscriber: SegmentSub,
     service: SegmentFactory,
 }
 
-/// The newest manifest received and not yet assembled into a snapshot.
-struct PendingManifest {
-    segment: Arc<HeldSegment>,
-    entries: Vec<ManifestEntry>,
-    offset: usize,
-}
-
 /// Receives consistent snapshots of one scene (DESIGN.md §5).
 ///
-/// It takes the newest manifest and, for each layer it names, the layer segment of the named
-/// generation, and hands them out as an [`Arc<Snapshot>`] that keeps the samples alive. Waiting
-/// blocks on an iceoryx2 event, never polls. If the writer exits or dies, the reader reports
-/// [`ReceiveError::WriterGone`] once, keeps the last snapshot and picks up a restarted writer.
+/// It takes the newest manifest and, for each segment it names, the segment of the named
+/// generation, and hands them out as an [`Arc<Snapshot>`] that keeps the samples alive. All
+/// segments arrive over one subscription whatever their number, the scene's segment stream; a
+/// connecting reader, or one that lost segments to overflow, asks the writer for a catch-up
+/// burst of the current snapshot on it. Waiting blocks on an iceoryx2 event,
+/// never polls. If the writer exits or dies, the reader reports [`ReceiveError::WriterGone`]
+/// once, keeps the last snapshot and picks up a restarted writer.
 pub struct SegmentSubscriber {
     services: SceneServices,
     config: Config,
@@ -232,17 +222,15 @@ pub struct SegmentSubscriber {
     handle_signals: bool,
     /// A termination signal was seen (iceoryx2 reports each one only once).
     terminated: AtomicBool,
-    manifest: SubPort,
-    layers: BTreeMap<u32, LayerPort>,
-    pending_manifest: Option<PendingManifest>,
-    current: Option<Arc<Snapshot>>,
-    /// The last snapshot of an earlier writer session, until the application drops it:
-    /// iceoryx2 drops a reader's connections to a writer that is gone only in a receive
-    /// after their samples were returned, so every layer is received once more then.
-    retired: Option<Weak<Snapshot>>,
+    stream: SubPort,
+    assembly: Assembly,
+    /// When the last catch-up burst was asked for, while one is awaited.
+    catch_up_asked: Option<Instant>,
     /// (session, generation) of the snapshot last handed out.
     delivered: Option<(u64, u64)>,
     status: WriterStatus,
+    /// The session of the current snapshot when the writer was found gone.
+    gone_session: Option<u64>,
     gone_unreported: bool,
     next_liveness_check: Instant,
     fast_checks_until: Option<Instant>,
@@ -258,7 +246,7 @@ impl std::fmt::Debug for SegmentSubscriber {
         f.debug_struct("SegmentSubscriber")
             .field("scene", &self.services.scene())
             .field("status", &self.status)
-            .field("current", &self.current.as_ref().map(|s| s.key()))
+            .field("current", &self.assembly.current().map(|s| s.key()))
             .finish_non_exhaustive()
     }
 }
@@ -280,8 +268,9 @@ impl SegmentSubscriber {
     /// application that waits elsewhere notice the request.
     pub fn termination_requested(&self) -> bool {
         if self.handle_signals && !self.terminated.load(Ordering::Relaxed) {
-            // iceoryx2 hands out each signal once: remember it.
-            let seen = self.node.wait(Duration::ZERO).is_err();
+            // iceoryx2 hands out each signal once: remember it. (Asked of its signal handler
+            // directly: `Node::wait` would cost a `nanosleep` system call on every wake-up.)
+            let seen = SignalHandler::termination_requested();
             self.terminated.fetch_or(seen, Ordering::Relaxed);
         }
         self.terminated.load(Ordering::Relaxed)
@@ -289,7 +278,7 @@ impl SegmentSubscriber {
 
     /// The newest complete snapshot received so far, without receiving anything.
     pub fn current(&self) -> Option<Arc<Snapshot>> {
-        self.current.clone()
+        self.assembly.current().cloned()
     }
 
     /// Receives what has arrived without blocking and returns the newest complete snapshot
@@ -304,10 +293,11 @@ impl SegmentSubscriber {
         if Instant::now() >= self.next_liveness_check {
             self.check_liveness();
         }
-        if let Some(snapshot) = &self.current {
+        let current = self.assembly.current().cloned();
+        if let Some(snapshot) = &current {
             self.delivered = Some(snapshot.key());
         }
-        Ok(self.current.clone())
+        Ok(current)
     }
 
     /// Blocks until a snapshot newer than the last one returned is complete, or `timeout`
@@ -324,7 +314,7 @@ impl SegmentSubscriber {
         let start = Instant::now();
         loop {
             self.sync()?;
-            if let Some(snapshot) = &self.current
+            if let Some(snapshot) = self.assembly.current()
                 && self.delivered != Some(snapshot.key())
             {
                 self.delivered = Some(snapshot.key());
@@ -373,186 +363,41 @@ impl SegmentSubscriber {
         }
     }
 
-    /// Receives everything that arrived and assembles the newest complete snapshot.
+    /// Receives everything that arrived and assembles the newest complete snapshot; asks for
+    /// a catch-up burst if a manifest cannot be completed.
     fn sync(&mut self) -> Result<(), ReceiveError> {
-        let mut first_error: Option<ReceiveError> = None;
-
-        // 1. Manifests: keep only the newest valid one (one at a time, to bound borrows).
-        let manifest_port = &self.manifest;
-        let pending_manifest = &mut self.pending_manifest;
-        let error = drain(manifest_port, |sample| {
-            let manifest = accept_manifest(sample).map_err(|source| ReceiveError::Corrupt {
-                service: manifest_port.name.clone(),
-                source,
-            })?;
-            *pending_manifest = Some(manifest);
-            Ok(())
-        });
-        first_error = first_error.or(error);
-
-        // 2. Subscribe to layers the pending manifest names for the first time.
-        let mut new_subscribers = false;
-        if let Some(manifest) = &self.pending_manifest {
-            for entry in &manifest.entries {
-                if self.layers.contains_key(&entry.layer_id) {
-                    continue;
-                }
-                let name = self.services.layer(entry.layer_id);
-                match open_segment_sub(&self.node, &self.services, &name) {
-                    Ok(port) => {
-                        self.layers.insert(
-                            entry.layer_id,
-                            LayerPort {
-                                port,
-                                pending: Vec::new(),
-                            },
-                        );
-                        new_subscribers = true;
-                    }
-                    Err(e) => {
-                        first_error.get_or_insert(e.into());
-                    }
-                }
-            }
+        let assembly = &mut self.assembly;
+        let first_error = drain(&self.stream, |segment| assembly.accept(segment));
+        self.assembly.retry_pending();
+        // A snapshot of another writer session after the writer was found gone: a restarted
+        // writer publishes; find out now rather than at the next periodic check.
+        if self.status == WriterStatus::Gone
+            && self.assembly.current().map(|c| c.session) != self.gone_session
+        {
+            self.check_liveness();
         }
-
-        // 3. Layer segments, from the layers whose segment the pending manifest wants and
-        //    that is not at hand yet (segments of other layers wait in their queues, where
-        //    the writer's next sample would replace them).
-        let current = self.current.as_deref();
-        for (&layer_id, layer) in &mut self.layers {
-            // The generation the pending manifest wants from this layer, if any.
-            let Some(wanted) = self.pending_manifest.as_ref().and_then(|m| {
-                let entry = m.entries.iter().find(|e| e.layer_id == layer_id)?;
-                Some((m.segment.header().session, entry.generation))
-            }) else {
-                continue;
-            };
-            let is_wanted = |s: &HeldSegment| (s.header().session, s.header().generation) == wanted;
-            let at_hand = layer.pending.iter().any(|s| is_wanted(s))
-                || current.is_some_and(|c| {
-                    c.layers
-                        .iter()
-                        .any(|l| l.entry.layer_id == layer_id && is_wanted(&l.segment))
-                });
-            if at_hand {
-                continue;
-            }
-            let wanted = Some(wanted);
-            let port = &layer.port;
-            let pending = &mut layer.pending;
-            let error = drain(port, |sample| {
-                let segment = HeldSegment::new(sample, SegmentKind::Layer, Some(layer_id))
-                    .map_err(|source| ReceiveError::Corrupt {
-                        service: port.name.clone(),
-                        source,
-                    })?;
-                keep_pending(pending, wanted, segment);
-                Ok(())
-            });
-            first_error = first_error.or(error);
-        }
-
-        // 4. Once the last snapshot of an earlier writer is released, receive from every
-        //    layer: iceoryx2 then drops the connections to that writer (shared-memory files
-        //    and descriptors), which a layer that is never republished would keep.
-        if self.retired.as_ref().is_some_and(|w| w.strong_count() == 0) {
-            self.retired = None;
-            let session = self.current.as_ref().map(|c| c.session);
-            for (&layer_id, layer) in &mut self.layers {
-                let wanted = self
-                    .current
-                    .as_ref()
-                    .and_then(|c| Some((c.session, c.layer_generation(layer_id)?)));
-                let (port, pending) = (&layer.port, &mut layer.pending);
-                let error = drain(port, |sample| {
-                    let segment = HeldSegment::new(sample, SegmentKind::Layer, Some(layer_id))
-                        .map_err(|source| ReceiveError::Corrupt {
-                            service: port.name.clone(),
-                            source,
-                        })?;
-                    if Some(segment.header().session) == session {
-                        keep_pending(pending, wanted, segment);
-                    }
-                    Ok(())
-                });
-                first_error = first_error.or(error);
-            }
-        }
-
-        // 5. Assemble.
-        self.try_assemble();
-
-        if new_subscribers {
+        // Stuck on a manifest, or no snapshot at all yet (the answer to the first hello may
+        // have been empty or lost): ask (again) for a catch-up.
+        let waiting = self.assembly.is_stuck() || self.assembly.current().is_none();
+        if !waiting {
+            self.catch_up_asked = None;
+        } else if self
+            .catch_up_asked
+            .is_none_or(|at| at.elapsed() >= CATCH_UP_RETRY)
+        {
             self.say_hello();
         }
         first_error.map_or(Ok(()), Err)
     }
 
-    /// Builds a snapshot from the pending manifest if every layer it names has arrived.
-    fn try_assemble(&mut self) {
-        let Some(manifest) = &self.pending_manifest else {
-            return;
-        };
-        let session = manifest.segment.header().session;
-        let mut layers = Vec::with_capacity(manifest.entries.len());
-        for entry in &manifest.entries {
-            let matches = |s: &Arc<HeldSegment>| {
-                s.header().session == session && s.header().generation == entry.generation
-            };
-            let from_pending = self
-                .layers
-                .get(&entry.layer_id)
-                .and_then(|l| l.pending.iter().rev().find(|s| matches(s)).cloned());
-            let from_current = || {
-                self.current
-                    .as_ref()
-                    .and_then(|c| c.layers.iter().find(|l| l.entry == *entry))
-                    .filter(|l| matches(&l.segment))
-                    .map(|l| Arc::clone(&l.segment))
-            };
-            match from_pending.or_else(from_current) {
-                Some(segment) => layers.push(SnapshotLayer {
-                    entry: *entry,
-                    segment,
-                }),
-                // Not arrived yet (or overflowed: a newer manifest is on its way).
-                None => return,
-            }
-        }
-        let Some(manifest) = self.pending_manifest.take() else {
-            return;
-        };
-        let snapshot = Snapshot {
-            session,
-            generation: manifest.segment.header().generation,
-            manifest: manifest.segment,
-            manifest_offset: manifest.offset,
-            layers,
-        };
-        // Drop segments the new snapshot superseded, and layers it no longer has.
-        self.layers.retain(|id, layer| {
-            let Some(generation) = snapshot.layer_generation(*id) else {
-                return false;
-            };
-            layer
-                .pending
-                .retain(|s| s.header().session == session && s.header().generation > generation);
-            true
-        });
-        if let Some(old) = self.current.as_ref().filter(|c| c.session != session) {
-            self.retired = Some(Arc::downgrade(old));
-        }
-        self.current = Some(Arc::new(snapshot));
-    }
-
-    /// Asks the writer to deliver the newest segments to this reader's new subscribers.
-    fn say_hello(&self) {
-        // Without a writer nobody listens; the next writer delivers on its first publish.
+    /// Asks the writer for a catch-up burst of the current snapshot.
+    fn say_hello(&mut self) {
+        self.catch_up_asked = Some(Instant::now());
+        // Without a writer nobody listens; the next writer's first publish arrives anyway.
         let _ = self.hello.notify();
     }
 
-    /// Finds out whether the writer (the publisher of the manifest service) is alive, removes
+    /// Finds out whether the writer (the publisher of the segment stream) is alive, removes
     /// the resources of a dead one and records a transition to [`WriterStatus::Gone`].
     fn check_liveness(&mut self) {
         let now = Instant::now();
@@ -564,7 +409,7 @@ impl SegmentSubscriber {
             }
         };
         let mut writer: Option<UniqueNodeId> = None;
-        self.manifest
+        self.stream
             .service
             .dynamic_config()
             .list_publishers(|details| {
@@ -593,31 +438,33 @@ impl SegmentSubscriber {
             (false, WriterStatus::Gone) => {}
             (false, _) => {
                 self.status = WriterStatus::Gone;
+                self.gone_session = self.assembly.current().map(|c| c.session);
                 self.gone_unreported = true;
                 self.fast_checks_until = None;
                 // Whatever the dead writer left half-published can never complete.
-                self.pending_manifest = None;
-                for layer in self.layers.values_mut() {
-                    layer.pending.clear();
-                }
+                self.assembly.drop_incomplete();
+                self.catch_up_asked = None;
             }
         }
     }
 }
 
-/// Receives the samples waiting on `port` one at a time, handing each to `accept` before the
-/// next is received (so at most one extra sample is borrowed). Returns the first failure; a
-/// sample that `accept` rejects is dropped and receiving goes on.
+/// Receives the samples waiting on `port` one at a time, checks each header and hands the
+/// segment to `accept` before the next is received (so at most one extra sample is
+/// borrowed). Returns the first failure; a rejected sample is dropped and receiving goes on.
 fn drain(
     port: &SubPort,
-    mut accept: impl FnMut(SegmentSample) -> Result<(), ReceiveError>,
+    mut accept: impl FnMut(HeldSegment) -> Result<(), protocol::SegmentError>,
 ) -> Option<ReceiveError> {
     let mut first_error = None;
     loop {
         match port.subscriber.receive() {
             Ok(Some(sample)) => {
-                if let Err(e) = accept(sample) {
-                    first_error.get_or_insert(e);
+                if let Err(source) = HeldSegment::new(sample).and_then(&mut accept) {
+                    first_error.get_or_insert(ReceiveError::Corrupt {
+                        service: port.name.clone(),
+                        source,
+                    });
                 }
             }
             Ok(None) => return first_error,
@@ -634,35 +481,6 @@ fn drain(
             }
         }
     }
-}
-
-/// Adds `segment` to a layer's pending segments, dropping those no snapshot can use any more:
-/// other writer sessions, generations older than the one `wanted` by the pending manifest, and
-/// beyond [`MAX_PENDING`] the oldest (a newer manifest will name a newer one).
-fn keep_pending(
-    pending: &mut Vec<Arc<HeldSegment>>,
-    wanted: Option<(u64, u64)>,
-    segment: HeldSegment,
-) {
-    let session = segment.header().session;
-    pending.retain(|s| {
-        let h = s.header();
-        h.session == session && wanted.is_none_or(|(ws, wg)| ws != session || h.generation >= wg)
-    });
-    while pending.len() >= MAX_PENDING {
-        pending.remove(0);
-    }
-    pending.push(Arc::new(segment));
-}
-
-fn accept_manifest(sample: SegmentSample) -> Result<PendingManifest, protocol::SegmentError> {
-    let segment = HeldSegment::new(sample, SegmentKind::Manifest, None)?;
-    let (entries, offset) = protocol::decode_manifest_prefix(segment.bytes())?;
-    Ok(PendingManifest {
-        segment: Arc::new(segment),
-        entries,
-        offset,
-    })
 }
 
 fn open_segment_sub(

@@ -99,8 +99,9 @@ pub(super) struct Publish {
     bytes: usize,
 }
 
-/// Per reader: generation -> (visible, answered), Unix ns.
-pub(super) type Seen = HashMap<u64, [u64; 2]>;
+/// Per reader: generation -> (visible, answered: Unix ns; the reader thread's CPU ns for
+/// the update).
+pub(super) type Seen = HashMap<u64, [u64; 3]>;
 
 /// A tiny deterministic jitter source (±25 %) so publishes do not lock into phase with
 /// periodic activity (liveness checks, timers).
@@ -152,6 +153,12 @@ fn drive(
             .max(Duration::from_nanos(2 * t1.saturating_sub(t0)));
     }
     std::thread::sleep(gap * 4);
+    let seen = collect_seen(readers)?;
+    Ok((publishes, seen))
+}
+
+/// Asks every reader for its records and reads them (`seen` lines up to `end`).
+pub(super) fn collect_seen(readers: &mut Readers) -> Res<Vec<Seen>> {
     readers.send_all("report")?;
     let deadline = Instant::now() + Duration::from_secs(60);
     let mut seen = Vec::with_capacity(readers.procs.len());
@@ -164,17 +171,17 @@ fn drive(
                 Some("end") => break,
                 Some("seen") => {
                     let v: Vec<u64> = it.filter_map(|x| x.parse().ok()).collect();
-                    let [g, vis, ans] = v[..] else {
+                    let [g, vis, ans, cpu] = v[..] else {
                         return Err(format!("malformed reader line {line:?}").into());
                     };
-                    map.insert(g, [vis, ans]);
+                    map.insert(g, [vis, ans, cpu]);
                 }
                 _ => return Err(format!("unexpected reader line {line:?}").into()),
             }
         }
         seen.push(map);
     }
-    Ok((publishes, seen))
+    Ok(seen)
 }
 
 /// Latencies of one driven case, ns.
@@ -199,14 +206,16 @@ pub(super) struct Observed {
     pub(super) layers_sent: Vec<f64>,
     pub(super) layers_total: usize,
     pub(super) bytes: Vec<f64>,
+    /// Reader thread CPU per snapshot received, ns, every reader.
+    pub(super) reader_cpu: Vec<f64>,
 }
 
 fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
     // Per reader, the snapshots it held, by generation.
-    let sorted: Vec<Vec<(u64, [u64; 2])>> = seen
+    let sorted: Vec<Vec<(u64, [u64; 3])>> = seen
         .iter()
         .map(|s| {
-            let mut v: Vec<(u64, [u64; 2])> = s.iter().map(|(g, t)| (*g, *t)).collect();
+            let mut v: Vec<(u64, [u64; 3])> = s.iter().map(|(g, t)| (*g, *t)).collect();
             v.sort_unstable_by_key(|(g, _)| *g);
             v
         })
@@ -223,9 +232,11 @@ fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
             // (when a slow reader skipped it) the next newer one.
             let i = s.partition_point(|(g, _)| *g < p.generation);
             match s.get(i) {
-                Some(&(g, [vis, ans])) => {
+                Some(&(g, [vis, ans, cpu])) => {
                     if g != p.generation {
                         o.coalesced += 1;
+                    } else {
+                        o.reader_cpu.push(cpu as f64);
                     }
                     o.visible.push(vis.saturating_sub(p.t0) as f64);
                     o.returned.push(vis.saturating_sub(p.t1) as f64);
@@ -259,6 +270,7 @@ impl Observed {
             .with("returned_p99_us", sp)
             .with("publish_call_us", median_p99_us(&self.publish).0)
             .with("bytes_per_publish", median(&self.bytes))
+            .with("reader_cpu_us", median(&self.reader_cpu) / 1e3)
             .with("skipped_by_slow_reader", self.coalesced as f64);
         if self.unseen > 0 {
             row.note = format!(
@@ -327,13 +339,13 @@ mod tests {
         let publishes = [publish(1, 1_000), publish(2, 2_000), publish(3, 3_000)];
         // Reader 0 saw every publish; reader 1 skipped generation 2.
         let r0: Seen = [
-            (1, [1_100, 1_200]),
-            (2, [2_100, 2_200]),
-            (3, [3_100, 3_200]),
+            (1, [1_100, 1_200, 7]),
+            (2, [2_100, 2_200, 7]),
+            (3, [3_100, 3_200, 7]),
         ]
         .into_iter()
         .collect();
-        let r1: Seen = [(1, [1_300, 1_400]), (3, [3_500, 3_600])]
+        let r1: Seen = [(1, [1_300, 1_400, 9]), (3, [3_500, 3_600, 9])]
             .into_iter()
             .collect();
         let o = observe(&publishes, &[r0, r1]);
@@ -342,6 +354,8 @@ mod tests {
         assert_eq!(o.all_visible, vec![300.0, 1_500.0, 500.0]);
         assert_eq!(o.all_answered, vec![400.0, 1_600.0, 600.0]);
         assert_eq!(o.visible.len(), 6);
+        // CPU of the snapshots that were the publish's own, not of a skipped one.
+        assert_eq!(o.reader_cpu.len(), 5);
         // After publish() returned (t0 + 10): reader 0's first snapshot at 1_100.
         assert_eq!(o.returned[0], 90.0);
     }

@@ -4,6 +4,8 @@
 //! socket against shared memory), [`qps`], [`throughput`]); the writer/reader plumbing
 //! they share (publishing, collecting what readers saw, timing) is in [`drive`].
 
+mod attach;
+mod bare;
 mod baseline;
 mod drive;
 mod office;
@@ -60,6 +62,7 @@ struct Plan {
     small_samples: usize,
     office_samples: usize,
     full_samples: usize,
+    attach_samples: usize,
     shm40_samples: usize,
     socket_samples: usize,
     qps_secs: f64,
@@ -86,6 +89,7 @@ impl Plan {
                 small_samples: 150,
                 office_samples: 150,
                 full_samples: 20,
+                attach_samples: 5,
                 shm40_samples: 8,
                 socket_samples: 6,
                 qps_secs: 1.5,
@@ -109,6 +113,7 @@ impl Plan {
                 small_samples: 600,
                 office_samples: 600,
                 full_samples: 60,
+                attach_samples: 15,
                 shm40_samples: 25,
                 socket_samples: 15,
                 qps_secs: 5.0,
@@ -125,6 +130,8 @@ struct Ctx {
     plan: Plan,
     /// The built-in office (scale 1) and its mint layout, built on first use.
     office: Option<(DsgGraph, SceneGraph)>,
+    /// The office split into 103 rooms, mint layout, built on first use.
+    office103: Option<SceneGraph>,
     /// The ~40 MB graph (the office in chocolate layout at a larger scale), built on first use.
     big: Option<(SceneGraph, f64)>,
     leftovers: Vec<String>,
@@ -152,6 +159,25 @@ impl Ctx {
     /// A copy of the office in mint layout.
     fn office_mint(&mut self) -> Res<SceneGraph> {
         Ok(self.office()?.1.clone())
+    }
+
+    /// A copy of the office split into [`scenes::MANY_ROOMS`] rooms, in mint layout.
+    fn office_many_rooms(&mut self) -> Res<SceneGraph> {
+        if self.office103.is_none() {
+            let t = Instant::now();
+            let dsg = ygg_dsg::office::split_rooms(&self.office()?.0, scenes::MANY_ROOMS)?;
+            let mint = scenes::office(&dsg, Layout::Mint)?;
+            eprintln!(
+                "office with {} rooms: {} nodes, {} layers, {} archived (mint), built in {:.1?}",
+                scenes::MANY_ROOMS,
+                mint.node_count(),
+                mint.layers().count(),
+                fmt_bytes(scenes::archived_bytes(&mint) as f64),
+                t.elapsed()
+            );
+            self.office103 = Some(mint);
+        }
+        Ok(self.office103.clone().expect("just built"))
     }
 }
 
@@ -181,6 +207,7 @@ pub fn run(args: &IpcArgs) -> Res<()> {
     let mut ctx = Ctx {
         plan,
         office: None,
+        office103: None,
         big: None,
         leftovers: Vec::new(),
     };

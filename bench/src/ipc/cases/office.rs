@@ -7,7 +7,27 @@ use super::{Ctx, in_scene};
 use ygg_dsg::layout::Layout;
 
 pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
-    let mut rows = case_office_mint(ctx)?;
+    let agents = scenes::agents_segment_bytes(&ctx.office()?.1)?;
+    let samples = ctx.plan.office_samples;
+    let mut rows = vec![super::bare::case_bare(ctx, agents, samples)?];
+    rows.extend(case_office_mint(ctx)?);
+    let samples = ctx.plan.attach_samples;
+    let graph = ctx.office_mint()?;
+    rows.push(super::attach::case_attach(
+        ctx,
+        "attach_office",
+        "a new reader process attaches to the office (mint) and answers a nearest-node query: from its start to the answer; descriptors and /dev/shm files with one writer and this reader",
+        graph,
+        samples,
+    )?);
+    let graph = ctx.office_many_rooms()?;
+    rows.push(super::attach::case_attach(
+        ctx,
+        "attach_office103",
+        "the same on the office split into 103 rooms (mint)",
+        graph,
+        samples,
+    )?);
     let graph = scenes::office(&ctx.office()?.0, Layout::Chocolate)?;
     rows.push(in_scene(ctx, "office-chocolate", |ctx, scene| {
         let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
