@@ -8,6 +8,7 @@ pub mod harness;
 pub mod kiddo_floor;
 pub mod report;
 pub mod workload;
+pub mod writer_ticks;
 
 /// Sorted object ids answering one query.
 pub type Answer = Vec<u64>;
@@ -51,10 +52,17 @@ pub struct LadderArgs {
     /// Skip the Spark-DSG Python anchor.
     #[arg(long)]
     pub no_spark_dsg: bool,
+    /// Only measure the writer's cost per tick of the demo's stream in process, over
+    /// this many ticks (see `writer_ticks`), and print it.
+    #[arg(long)]
+    pub writer_ticks: Option<usize>,
 }
 
 /// Runs the ladder and writes its report.
 pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if let Some(ticks) = args.writer_ticks {
+        return writer_ticks::run(args.scale, ticks);
+    }
     let (per_room, reps) = if args.quick {
         (args.per_room.min(16), 1)
     } else {
