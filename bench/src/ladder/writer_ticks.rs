@@ -34,11 +34,13 @@ fn role_of(name: &str) -> String {
     }
 }
 
-/// Archives `value` into `buf` through the in-place path the writer uses.
+/// Archives `len` bytes into `buf` through `write` (the in-place path the writer uses
+/// on a loaned sample): `buf` only grows, so no tick pays for zeroing it.
 fn archive_len(len: usize, buf: &mut SegmentBytes, write: impl FnOnce(&mut [u8]) -> usize) {
-    buf.clear();
-    buf.resize(len, 0);
-    let written = write(buf);
+    if buf.len() < len {
+        buf.resize(len, 0);
+    }
+    let written = write(&mut buf[..len]);
     assert_eq!(written, len, "archived length");
 }
 
@@ -53,7 +55,8 @@ pub fn run(scale: f64, ticks: usize) -> Result<(), Box<dyn std::error::Error>> {
     let mut cache = SegmentCache::new();
     let mut published: BTreeMap<u32, u64> = BTreeMap::new();
     let mut buf = SegmentBytes::new();
-    let mut by_role: BTreeMap<String, (f64, f64, usize)> = BTreeMap::new();
+    // Per role: build ns, archive ns, bytes (sums) and each send's build + archive ns.
+    let mut by_role: BTreeMap<String, (f64, f64, usize, Vec<f64>)> = BTreeMap::new();
     let mut t = Ticks::default();
     for tick in 0..=ticks {
         let t0 = Instant::now();
@@ -84,6 +87,7 @@ pub fn run(scale: f64, ticks: usize) -> Result<(), Box<dyn std::error::Error>> {
             e.0 += (b - a).as_nanos() as f64;
             e.1 += (c - b).as_nanos() as f64;
             e.2 += len;
+            e.3.push((c - a).as_nanos() as f64);
             build_ns += (b - a).as_nanos() as f64;
             archive_ns += (c - b).as_nanos() as f64;
             bytes += len;
@@ -138,16 +142,22 @@ pub fn run(scale: f64, ticks: usize) -> Result<(), Box<dyn std::error::Error>> {
         median(&total) / 1e3
     );
     println!("  bytes archived per tick: {:.0} mean", mean(&t.bytes));
-    println!("by layer role, µs per tick (build, archive) and KB per tick:");
+    println!(
+        "by layer role: µs per tick (build, archive), KB per tick, sends, µs per send (median, max):"
+    );
     let mut roles: Vec<_> = by_role.into_iter().collect();
     roles.sort_by(|a, b| (b.1.0 + b.1.1).total_cmp(&(a.1.0 + a.1.1)));
-    for (role, (b, a, n)) in roles {
+    for (role, (b, a, n, sends)) in roles {
         let per = ticks as f64;
+        let max = sends.iter().copied().fold(0.0, f64::max);
         println!(
-            "  {role:<28} {:>8.1} {:>8.1} {:>9.1}",
+            "  {role:<24} {:>7.1} {:>7.1} {:>8.1} {:>6} {:>8.1} {:>8.1}",
             b / per / 1e3,
             a / per / 1e3,
-            n as f64 / per / 1e3
+            n as f64 / per / 1e3,
+            sends.len(),
+            median(&sends) / 1e3,
+            max / 1e3
         );
     }
     Ok(())

@@ -170,9 +170,21 @@ impl SceneGraph {
         row: u32,
         ids: &[u64],
     ) {
-        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.points.extend_from_slice(&n.points);
         push_offset(&mut s.point_offsets, s.points.len());
+        self.push_row_except_points(s, st, n, row, ids);
+    }
+
+    /// [`SceneGraph::push_row`] for every column but the points and their offsets.
+    pub(crate) fn push_row_except_points(
+        &self,
+        s: &mut LayerSegment,
+        st: &mut StringTable,
+        n: &Node,
+        row: u32,
+        ids: &[u64],
+    ) {
+        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
         s.children.extend(n.children.iter().map(|c| c.0));
         push_offset(&mut s.child_offsets, s.children.len());

@@ -314,13 +314,10 @@ fn rows_in_place(
         let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
         // New strings go to the segment's own table.
         one.strings = std::mem::take(&mut seg.strings);
-        graph.push_row(
-            &mut one,
-            table,
-            &graph.nodes[&NodeId(ids[row])],
-            row as u32,
-            ids,
-        );
+        let node = &graph.nodes[&NodeId(ids[row])];
+        // The points go from the node to the column directly (a mesh node may hold many).
+        graph.push_row_except_points(&mut one, table, node, row as u32, ids);
+        one.point_offsets.push(node.points.len() as u32);
         seg.strings = std::mem::take(&mut one.strings);
         let same_shape = [
             (&seg.point_offsets, &one.point_offsets),
@@ -342,6 +339,7 @@ fn rows_in_place(
     }
     let mut terms_changed = false;
     for (&row, one) in dirty_rows.iter().zip(&fresh) {
+        let points = &graph.nodes[&NodeId(ids[row])].points;
         let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
         let r = at(&seg.label_offsets);
         terms_changed |= seg.labels[r.clone()] != one.labels[..];
@@ -359,8 +357,8 @@ fn rows_in_place(
             one.feature_keys.len(),
         );
         let r = at(&seg.point_offsets);
-        splice(&mut seg.points, r.clone(), &one.points);
-        shift_offsets(&mut seg.point_offsets, row, r.len(), one.points.len());
+        splice(&mut seg.points, r.clone(), points);
+        shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
         let r = at(&seg.child_offsets);
         splice(&mut seg.children, r.clone(), &one.children);
         shift_offsets(&mut seg.child_offsets, row, r.len(), one.children.len());
@@ -392,13 +390,15 @@ fn rows_in_place(
     Some(terms_changed)
 }
 
-/// Replaces `values[range]` by `new`: overwritten when the lengths agree, spliced in
-/// (moving the tail) otherwise.
+/// Replaces `values[range]` by `new`: the common prefix is overwritten, and the rest
+/// inserted or removed (moving the tail once).
 fn splice<T: Copy>(values: &mut Vec<T>, range: Range<usize>, new: &[T]) {
-    if range.len() == new.len() {
-        values[range].copy_from_slice(new);
-    } else {
-        values.splice(range, new.iter().copied());
+    let common = range.len().min(new.len());
+    values[range.start..range.start + common].copy_from_slice(&new[..common]);
+    if new.len() > common {
+        values.splice(range.end..range.end, new[common..].iter().copied());
+    } else if range.len() > common {
+        values.drain(range.start + common..range.end);
     }
 }
 
