@@ -6,6 +6,7 @@ pub mod answer_line;
 pub mod flat_dsg;
 pub mod harness;
 pub mod kiddo_floor;
+pub mod reader_cpu;
 pub mod report;
 pub mod workload;
 pub mod writer_ticks;
@@ -56,12 +57,19 @@ pub struct LadderArgs {
     /// this many ticks (see `writer_ticks`), and print it.
     #[arg(long)]
     pub writer_ticks: Option<usize>,
+    /// Only measure a reader's CPU time per single-layer update, over this many
+    /// updates (see `reader_cpu`), and print it.
+    #[arg(long)]
+    pub reader_cpu: Option<usize>,
 }
 
 /// Runs the ladder and writes its report.
 pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
     if let Some(ticks) = args.writer_ticks {
         return writer_ticks::run(args.scale, ticks);
+    }
+    if let Some(updates) = args.reader_cpu {
+        return reader_cpu::run(args.scale, updates);
     }
     let (per_room, reps) = if args.quick {
         (args.per_room.min(16), 1)
