@@ -221,8 +221,8 @@ impl SpatialIndex for KdIndex {
 }
 
 /// A kd-tree index inside a validated snapshot, queried in place (zero-copy): kiddo's
-/// archived tree and the node ids its items refer to.
-/// A layer index may carry a [`RowPatch`]: rows changed since its tree was built.
+/// archived tree and the node ids its items refer to. A layer index may carry a patch:
+/// the rows changed since its tree was built.
 #[derive(Clone, Copy)]
 pub struct ArchivedIndex<'a> {
     tree: &'a ArchivedKdTree,
