@@ -1,13 +1,18 @@
 //! Property tests for the spatial indexes and queries: on random graphs under random
 //! mutation sequences, every spatial query answers exactly what brute force answers
 //! (same set, same order) on the live graph (with live indexes), on its snapshot (with
-//! archived indexes), and through indexes a reader builds itself; bad input is an error.
+//! archived indexes), on the segments a publishing writer sends (layer indexes patched
+//! since their base tree, and folded), and through indexes a reader builds itself; bad
+//! input is an error.
 
 use proptest::prelude::*;
 use ygg_store::index::{IndexCache, SpatialIndex, build_layer_index, build_subtree_index};
 use ygg_store::query::{
     self, ConeView, SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes,
     nodes_within_radius, visible, within_index,
+};
+use ygg_store::snapshot::{
+    ArchivedScene, SegmentBytes, SegmentCache, archive, validate_layer, validate_manifest,
 };
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView, Scope, distance_squared};
 
@@ -363,9 +368,45 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
     }
 }
 
-fn check_all(g: &SceneGraph, probes: &[Probe], cache: &mut IndexCache) {
+/// The segments a publishing writer sends for `g` now (through `segments`, which
+/// patches the layer indexes it built before), archived: the manifest, then each layer.
+fn published(g: &mut SceneGraph, segments: &mut SegmentCache) -> (SegmentBytes, Vec<SegmentBytes>) {
+    let layers: Vec<LayerId> = g.layers().collect();
+    let layers = layers
+        .into_iter()
+        .map(|l| archive(segments.layer_segment(g, l)))
+        .collect();
+    (archive(segments.manifest(g, 1)), layers)
+}
+
+/// Checks every query on the segments a publishing writer sends for `g` now.
+fn check_published(g: &mut SceneGraph, segments: &mut SegmentCache, probes: &[Probe]) {
+    let (manifest, layers) = published(g, segments);
+    let manifest = validate_manifest(&manifest, "manifest").unwrap();
+    let layers = layers
+        .iter()
+        .map(|l| validate_layer(l, "layer").unwrap())
+        .collect();
+    let view = ArchivedScene::new(manifest, layers).unwrap();
+    check_view(&view, probes);
+    for l in g.layers() {
+        assert_eq!(
+            g.layer_index(l).map(|i| i.len()),
+            view.layer_index(l).map(|i| i.len())
+        );
+    }
+}
+
+fn check_all(
+    g: &mut SceneGraph,
+    probes: &[Probe],
+    cache: &mut IndexCache,
+    segments: &mut SegmentCache,
+) {
     g.check_invariants().unwrap();
-    check_view(g, probes);
+    check_view(&*g, probes);
+    check_published(g, segments, probes);
+    let g = &*g;
     let snapshot = g.to_snapshot();
     let archived = snapshot.view();
     check_view(&archived, probes);
@@ -396,14 +437,18 @@ proptest! {
     ) {
         let mut g = build(&start);
         let mut cache = IndexCache::new();
-        check_all(&g, &probes, &mut cache);
+        let mut segments = SegmentCache::new();
+        check_all(&mut g, &probes, &mut cache, &mut segments);
         for (i, op) in ops.iter().enumerate() {
             apply(&mut g, op);
+            if i % 5 == 4 {
+                check_published(&mut g, &mut segments, &probes);
+            }
             if i % 20 == 19 {
-                check_all(&g, &probes, &mut cache);
+                check_all(&mut g, &probes, &mut cache, &mut segments);
             }
         }
-        check_all(&g, &probes, &mut cache);
+        check_all(&mut g, &probes, &mut cache, &mut segments);
     }
 }
 
@@ -625,6 +670,7 @@ fn large_scene_under_many_mutations_matches_brute_force() {
             range: rng.gen_range(0..16),
         })
         .collect();
+    let mut segments = SegmentCache::new();
     for step in 0..4000 {
         let mesh_nodes: Vec<NodeId> = g.layer_nodes(mesh).map(|n| g.node_id(n)).collect();
         let pick = mesh_nodes[rng.gen_range(0..mesh_nodes.len())];
@@ -655,6 +701,14 @@ fn large_scene_under_many_mutations_matches_brute_force() {
                 let _ = g.unnest(o);
                 g.nest(NodeId(rng.gen_range(0..4)), o).unwrap();
             }
+        }
+        // A writer publishes every few steps: its layer indexes are patched, and folded
+        // past their budget.
+        if step % 4 == 3 {
+            published(&mut g, &mut segments);
+        }
+        if step % 250 == 249 {
+            check_published(&mut g, &mut segments, &probes);
         }
         if step % 1000 == 999 {
             g.check_invariants().unwrap();

@@ -59,7 +59,7 @@ pub fn segment_fingerprint(s: &LayerSegment) -> String {
         s.aabbs,
         postings(&s.label_index, &s.label_postings),
         postings(&s.key_index, &s.key_postings),
-        s.layer_index.as_ref().map(tree),
+        s.layer_index_entries(),
         s.node_indexes
             .iter()
             .map(|n| (n.root, n.ids.clone(), tree(&n.tree)))

@@ -6,8 +6,10 @@ pub mod answer_line;
 pub mod flat_dsg;
 pub mod harness;
 pub mod kiddo_floor;
+pub mod reader_cpu;
 pub mod report;
 pub mod workload;
+pub mod writer_ticks;
 
 /// Sorted object ids answering one query.
 pub type Answer = Vec<u64>;
@@ -51,10 +53,24 @@ pub struct LadderArgs {
     /// Skip the Spark-DSG Python anchor.
     #[arg(long)]
     pub no_spark_dsg: bool,
+    /// Only measure the writer's cost per tick of the demo's stream in process, over
+    /// this many ticks (see `writer_ticks`), and print it.
+    #[arg(long)]
+    pub writer_ticks: Option<usize>,
+    /// Only measure a reader's CPU time per single-layer update, over this many
+    /// updates (see `reader_cpu`), and print it.
+    #[arg(long)]
+    pub reader_cpu: Option<usize>,
 }
 
 /// Runs the ladder and writes its report.
 pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if let Some(ticks) = args.writer_ticks {
+        return writer_ticks::run(args.scale, ticks);
+    }
+    if let Some(updates) = args.reader_cpu {
+        return reader_cpu::run(args.scale, updates);
+    }
     let (per_room, reps) = if args.quick {
         (args.per_room.min(16), 1)
     } else {

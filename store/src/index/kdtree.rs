@@ -18,6 +18,7 @@
 )]
 
 use super::archived_layout::{ArchivedKdTree, KdTree, layout, tile_widths};
+use super::patch::RowPatch;
 use super::spatial_index::{SpatialIndex, prefetch};
 use super::walk::{self, Cell, KdTreeAccessor, TileVisitor};
 use crate::bytes::{SegmentBytes, archive};
@@ -220,18 +221,37 @@ impl SpatialIndex for KdIndex {
 }
 
 /// A kd-tree index inside a validated snapshot, queried in place (zero-copy): kiddo's
-/// archived tree and the node ids its items refer to.
+/// archived tree and the node ids its items refer to. A layer index may carry a patch:
+/// the rows changed since its tree was built.
 #[derive(Clone, Copy)]
 pub struct ArchivedIndex<'a> {
     tree: &'a ArchivedKdTree,
     ids: &'a [u64],
+    patch: Option<RowPatch<'a>>,
 }
 
 impl<'a> ArchivedIndex<'a> {
     /// # Invariant
     /// `tree` passed [`check_tree`] with an item bound of at most `ids.len()`.
     pub(crate) fn new(tree: &'a ArchivedKdTree, ids: &'a [u64]) -> Self {
-        ArchivedIndex { tree, ids }
+        ArchivedIndex {
+            tree,
+            ids,
+            patch: None,
+        }
+    }
+
+    /// A layer index: `tree` over rows as they were, patched by `patch`.
+    ///
+    /// # Invariant
+    /// `tree` passed [`check_tree`] with the patch's base row count as item bound;
+    /// `ids` are the layer's ids (one per row).
+    pub(crate) fn patched(tree: &'a ArchivedKdTree, ids: &'a [u64], patch: RowPatch<'a>) -> Self {
+        ArchivedIndex {
+            tree,
+            ids,
+            patch: (!patch.is_clean()).then_some(patch),
+        }
     }
 }
 
@@ -246,7 +266,7 @@ impl std::fmt::Debug for ArchivedIndex<'_> {
 
 impl SpatialIndex for ArchivedIndex<'_> {
     fn len(&self) -> usize {
-        self.tree.size()
+        self.patch.map_or(self.tree.size(), |p| p.len())
     }
 
     fn node_of(&self, item: u32) -> Option<NodeId> {
@@ -257,14 +277,39 @@ impl SpatialIndex for ArchivedIndex<'_> {
         prefetch(self.ids.as_ptr().wrapping_add(item as usize));
     }
 
-    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, f: F) {
-        if let Some(access) = ArchivedTreeAccess::new(self.tree) {
-            walk::nearest_visit(&access, c, f);
+    /// The base tree's live entries, nearer cells first, then the patched rows' points.
+    fn nearest_visit<F: FnMut(f32, u32) -> f32>(&self, c: &Point, mut f: F) {
+        let access = ArchivedTreeAccess::new(self.tree);
+        let Some(patch) = self.patch else {
+            if let Some(access) = access {
+                walk::nearest_visit(&access, c, f);
+            }
+            return;
+        };
+        let mut bound = f32::INFINITY;
+        if let Some(access) = access {
+            walk::nearest_visit(&access, c, |d2, item| {
+                if !patch.is_dead(item) {
+                    bound = f(d2, item);
+                }
+                bound
+            });
         }
+        patch.nearest_visit(c, bound, &mut f);
     }
 
-    fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, f: F) {
-        within(self.tree, c, r2, f);
+    fn points_within<F: FnMut(f32, u32, &Point)>(&self, c: &Point, r2: f32, mut f: F) {
+        match self.patch {
+            None => within(self.tree, c, r2, f),
+            Some(patch) => {
+                within(self.tree, c, r2, |d2, item, p| {
+                    if !patch.is_dead(item) {
+                        f(d2, item, p);
+                    }
+                });
+                patch.within(c, r2, &mut f);
+            }
+        }
     }
 
     fn memory_bytes(&self) -> usize {

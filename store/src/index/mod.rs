@@ -5,7 +5,7 @@
 //! | index | type | kept by | items |
 //! |---|---|---|---|
 //! | live | [`LiveIndex`] over a [`LiveKdTree`] plus an overlay of nodes moved wholesale | [`crate::SceneGraph`], updated by every mutation | node handles |
-//! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
+//! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` (a layer index: plus the rows patched since it was built, `patch.rs`) | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
 //! | reader-built | [`KdIndex`]: kiddo's `ImmutableKdTree`, kept archived | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
 //!
 //! kiddo builds the snapshot's and the readers' trees and answers their radius queries.
@@ -29,7 +29,7 @@
 //!
 //! # Modules, bottom up
 //! `spatial_index` (the trait), `walk` (the nearest walk over a kd-tree accessor), `live`
-//! (the live kd-tree), `overlay` (moved nodes over it), `live_index` (the live graph's
+//! (the live kd-tree), `overlay` (moved nodes over it), `patch` (changed rows over an archived layer index), `live_index` (the live graph's
 //! indexes), `archived_layout` (kiddo's archived layout, checked), `kdtree` (archived and
 //! reader-built indexes), `from_view` (indexes built from any view).
 
@@ -39,6 +39,7 @@ mod kdtree;
 mod live;
 mod live_index;
 mod overlay;
+mod patch;
 mod spatial_index;
 mod walk;
 
@@ -52,4 +53,5 @@ pub(crate) use live::{Entry, Located};
 pub use live_index::LiveIndex;
 pub(crate) use live_index::{LiveIndexes, NO_HANDLE};
 pub(crate) use overlay::OverlaidTree;
+pub(crate) use patch::RowPatch;
 pub use spatial_index::SpatialIndex;

@@ -3,12 +3,13 @@
 //! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
 
 use super::schema::{
-    FORMAT_VERSION, LayerSegment, Manifest, ManifestLayer, NO_PARENT, NodeIndexSegment,
+    FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
+    NodeIndexSegment,
 };
 use crate::bytes::{SegmentBytes, archive};
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
-use crate::index::{KdTree, build_tree};
-use crate::{LayerId, Node, NodeId, SceneGraph, SnapshotError};
+use crate::index::{ArchivedKdTree, build_tree};
+use crate::{LayerId, Node, NodeId, Point, SceneGraph, SnapshotError};
 use rkyv::Serialize;
 
 /// Maps graph symbols to indexes in a layer segment's string table.
@@ -61,10 +62,12 @@ impl LayerSegment {
         ]
     }
 
-    /// Rebuilds the label and key postings from the label and feature-key columns.
+    /// Rebuilds the label and key postings from the label and feature-key columns: a
+    /// counting sort of the rows by term (string index), terms ascending, rows
+    /// ascending within each.
     pub(crate) fn rebuild_postings(&mut self) {
-        let rows = self.ids.len();
-        for (offsets, terms, index, postings) in [
+        let terms = self.strings.len();
+        for (offsets, column, index, postings) in [
             (
                 &self.label_offsets,
                 &self.labels,
@@ -78,23 +81,55 @@ impl LayerSegment {
                 &mut self.key_postings,
             ),
         ] {
-            let mut rows_by_term: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-            for row in 0..rows {
-                for &term in &terms[offsets[row] as usize..offsets[row + 1] as usize] {
-                    rows_by_term.entry(term).or_default().push(row as u32);
-                }
+            // starts[t + 1] counts term t's rows, then becomes where they start.
+            let mut starts = vec![0u32; terms + 1];
+            for &term in column.iter() {
+                starts[term as usize + 1] += 1;
+            }
+            for t in 0..terms {
+                starts[t + 1] += starts[t];
             }
             index.clear();
+            for (t, w) in starts.windows(2).enumerate() {
+                if w[0] < w[1] {
+                    index.insert(self.strings[t].clone(), [w[0], w[1]]);
+                }
+            }
             postings.clear();
-            for (term, rows) in rows_by_term {
-                let start = postings.len() as u32;
-                postings.extend(rows);
-                index.insert(
-                    self.strings[term as usize].clone(),
-                    [start, postings.len() as u32],
-                );
+            postings.resize(column.len(), 0);
+            let mut next = starts;
+            for (row, w) in offsets.windows(2).enumerate() {
+                for &term in &column[w[0] as usize..w[1] as usize] {
+                    let at = &mut next[term as usize];
+                    postings[*at as usize] = row as u32;
+                    *at += 1;
+                }
             }
         }
+    }
+}
+
+impl LayerSegment {
+    /// The layer index's live entries as `(row, point)`, sorted by row and then by the
+    /// point's bits (`None` without a layer index): the base tree's entries that the
+    /// patch leaves alive plus the patched rows' points. Equal for two segments whose
+    /// indexes answer every query alike, however patched; for tests and tools (it
+    /// archives the base tree to read it).
+    pub fn layer_index_entries(&self) -> Option<Vec<(u32, Point)>> {
+        let index = self.layer_index.as_ref()?;
+        let rows = self.ids.len() as u32;
+        let dead = |row: u32| row >= rows || index.patched.binary_search(&row).is_ok();
+        let bytes = archive(&index.tree);
+        let tree = rkyv::access::<ArchivedKdTree, rkyv::rancor::Error>(&bytes)
+            .expect("a tree archived just now is valid");
+        let mut entries: Vec<(u32, Point)> = tree.iter().filter(|(row, _)| !dead(*row)).collect();
+        for &row in &index.patched {
+            let r = self.point_offsets[row as usize] as usize
+                ..self.point_offsets[row as usize + 1] as usize;
+            entries.extend(self.points[r].iter().map(|p| (row, *p)));
+        }
+        entries.sort_unstable_by_key(|(row, p)| (*row, p.map(f32::to_bits)));
+        Some(entries)
     }
 }
 
@@ -135,9 +170,21 @@ impl SceneGraph {
         row: u32,
         ids: &[u64],
     ) {
-        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.points.extend_from_slice(&n.points);
         push_offset(&mut s.point_offsets, s.points.len());
+        self.push_row_except_points(s, st, n, row, ids);
+    }
+
+    /// [`SceneGraph::push_row`] for every column but the points and their offsets.
+    pub(crate) fn push_row_except_points(
+        &self,
+        s: &mut LayerSegment,
+        st: &mut StringTable,
+        n: &Node,
+        row: u32,
+        ids: &[u64],
+    ) {
+        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
         s.children.extend(n.children.iter().map(|c| c.0));
         push_offset(&mut s.child_offsets, s.children.len());
@@ -304,11 +351,13 @@ in_place_archiving!(Manifest);
 impl SceneGraph {
     /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of
     /// `segment` (the layer's columns) whose items are rows.
+    ///
+    /// The index is fresh: its base tree holds every point, nothing is patched.
     pub(crate) fn archived_layer_index(
         &self,
         layer: LayerId,
         segment: &LayerSegment,
-    ) -> Option<KdTree> {
+    ) -> Option<LayerIndexSegment> {
         self.indexes.layers.get(&layer)?;
         let mut entries = Vec::with_capacity(segment.points.len());
         for (row, w) in segment.point_offsets.windows(2).enumerate() {
@@ -318,7 +367,12 @@ impl SceneGraph {
                     .map(|p| (row as u32, *p)),
             );
         }
-        Some(build_tree(&entries))
+        Some(LayerIndexSegment {
+            base_rows: segment.ids.len() as u32,
+            base_points: entries.len() as u32,
+            tree: build_tree(&entries),
+            patched: Vec::new(),
+        })
     }
 
     /// The node indexes rooted in `layer` for a snapshot, ascending by root: items are

@@ -5,21 +5,25 @@
 //! starts at the generation of the cached segment and the rows kept their places since
 //! — nodes removed only from the end (the largest ids), new nodes only with ids above
 //! every remaining one, no index enabled or disabled — the next build looks up only the
-//! changed nodes: when each changed row keeps the length of every column (a node moved,
-//! a value changed) it is overwritten in place and new rows are appended; otherwise
-//! fresh columns are built, copying each run of unchanged rows from the previous ones in
-//! one go. Label and key postings are rebuilt only when labels or keys changed or rows
-//! were added. The layer index is rebuilt only when points changed, a node index only
-//! when its sub-tree did. Otherwise (the journal overflowed, or starts elsewhere: another
+//! changed nodes: each changed row is overwritten in place where it keeps the length of
+//! a column (a node moved, a value changed) and spliced in where it does not (an edge or
+//! a child added), and new rows are appended; when many rows change length, fresh
+//! columns are built instead, copying each run of unchanged rows from the previous ones
+//! in one go. Label and key postings are rebuilt (a counting sort of the rows by term)
+//! only when labels or keys changed or rows were added or removed. The layer index is patched with the rows whose points changed and folded
+//! into a new tree past a budget (`index_patch`), a node index is rebuilt only when its
+//! sub-tree changed. Otherwise (the journal overflowed, or starts elsewhere: another
 //! consumer took it) it builds from scratch like [`SceneGraph::layer_segment`].
 //!
-//! Either way the segment holds the same rows as a fresh one; only the order of its
-//! string table may differ, and strings no longer used stay until the next full build
+//! Either way the segment holds the same rows as a fresh one, and a layer index with the
+//! same entries (`LayerSegment::layer_index_entries`); only the order of its string
+//! table and the split of the index into base tree and patch may differ, and strings no longer used stay until the next full build
 //! (one is forced once the table doubled). `store/tests/graph_props.rs` and
 //! `dsg/tests/segment_cache_office.rs` check this against fresh builds under random
 //! mutations.
 
 use super::archive::StringTable;
+use super::index_patch::{PointChanges, update_layer_index};
 use super::schema::{LayerSegment, Manifest};
 use crate::change::LayerChanges;
 use crate::{LayerId, NodeId, SceneGraph};
@@ -70,6 +74,8 @@ struct Cached {
     incarnation: u64,
     /// Length of the string table after the last full build.
     strings_at_full_build: usize,
+    /// Base entries of the layer index that its patch killed (`index_patch`).
+    index_killed: usize,
 }
 
 impl SegmentCache {
@@ -153,6 +159,7 @@ fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
         strings_at_full_build: segment.strings.len(),
         segment,
         strings,
+        index_killed: 0,
     })
 }
 
@@ -169,6 +176,7 @@ fn patched(
         strings: mut table,
         strings_at_full_build,
         incarnation,
+        mut index_killed,
     } = cache;
     if changes.everything
         || changes.since != old.generation
@@ -183,6 +191,7 @@ fn patched(
     let mut removed = changes.removed;
     removed.sort_unstable();
     removed.dedup();
+    let mut cut_points = 0;
     if !removed.is_empty() {
         // Only the last rows, gone for good, keep the other rows in place.
         let kept = old.ids.len().checked_sub(removed.len())?;
@@ -191,6 +200,7 @@ fn patched(
         {
             return None;
         }
+        cut_points = PointChanges::points_from(&old, kept);
         old.truncate_rows(kept);
         changed.retain(|id| removed.binary_search(id).is_err());
     }
@@ -213,6 +223,7 @@ fn patched(
     let mut ids = Vec::with_capacity(l.nodes.len());
     ids.extend_from_slice(&old.ids);
     ids.extend_from_slice(&appended);
+    let point_changes = PointChanges::find(graph, &old, &dirty_rows, &ids, cut_points);
 
     let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &ids) {
         Some(terms_changed) => {
@@ -257,8 +268,8 @@ fn patched(
         }
     };
 
-    if changes.geometry {
-        s.layer_index = graph.archived_layer_index(layer, &s);
+    if changes.geometry || s.layer_index.is_some() {
+        update_layer_index(graph, layer, &mut s, point_changes, &mut index_killed);
     }
     let mut roots = changes.index_roots;
     roots.sort_unstable();
@@ -275,16 +286,21 @@ fn patched(
         strings: table,
         incarnation,
         strings_at_full_build,
+        index_killed,
     }))
 }
 
-/// Rewrites the changed rows `dirty_rows` of `seg` in place: those that keep the
-/// length of every column (a node moved, a value changed) are overwritten; from the
-/// first one that does not (an edge or child added), the rows are cut and pushed
-/// again — if that tail is short (appending nodes changes the last rows: an odometry
-/// edge to the previous pose). Returns whether the postings must be rebuilt, or
-/// `None`, changing nothing, when the tail would be long. `ids` are the new sorted
-/// ids.
+/// Most rows whose column lengths change (an edge, a child or a label added) that one
+/// build splices into the columns in place; each splice moves the tails of the columns
+/// it changes and shifts the later offsets. Past it, fresh columns are built.
+const MAX_SPLICED: usize = 32;
+
+/// Rewrites the changed rows `dirty_rows` of `seg` in place: each row's entries are
+/// overwritten where they keep their length (a node moved, a value changed) and
+/// spliced in where they do not (an edge or child added: the odometry edge to the
+/// previous pose, a pose nested under a place). Returns whether the postings must be
+/// rebuilt (labels or keys changed), or `None`, changing no row, when more than
+/// [`MAX_SPLICED`] rows change length. `ids` are the new sorted ids.
 fn rows_in_place(
     graph: &SceneGraph,
     seg: &mut LayerSegment,
@@ -293,18 +309,15 @@ fn rows_in_place(
     ids: &[u64],
 ) -> Option<bool> {
     let mut fresh = Vec::with_capacity(dirty_rows.len());
-    let mut cut_at = None;
+    let mut reshaped = 0;
     for &row in dirty_rows {
         let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
         // New strings go to the segment's own table.
         one.strings = std::mem::take(&mut seg.strings);
-        graph.push_row(
-            &mut one,
-            table,
-            &graph.nodes[&NodeId(ids[row])],
-            row as u32,
-            ids,
-        );
+        let node = &graph.nodes[&NodeId(ids[row])];
+        // The points go from the node to the column directly (a mesh node may hold many).
+        graph.push_row_except_points(&mut one, table, node, row as u32, ids);
+        one.point_offsets.push(node.points.len() as u32);
         seg.strings = std::mem::take(&mut one.strings);
         let same_shape = [
             (&seg.point_offsets, &one.point_offsets),
@@ -317,37 +330,46 @@ fn rows_in_place(
         .iter()
         .all(|(old, new)| old[row + 1] - old[row] == new[1]);
         if !same_shape {
-            // Dirty rows are ascending: this one and all after it are pushed again.
-            let rows = seg.ids.len();
-            if rows - row > rows / 8 {
+            reshaped += 1;
+            if reshaped > MAX_SPLICED {
                 return None;
             }
-            cut_at = Some(row);
-            break;
         }
         fresh.push(one);
     }
-    let mut terms_changed = cut_at.is_some();
+    let mut terms_changed = false;
     for (&row, one) in dirty_rows.iter().zip(&fresh) {
+        let points = &graph.nodes[&NodeId(ids[row])].points;
         let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
         let r = at(&seg.label_offsets);
         terms_changed |= seg.labels[r.clone()] != one.labels[..];
-        seg.labels[r].copy_from_slice(&one.labels);
+        splice(&mut seg.labels, r.clone(), &one.labels);
+        shift_offsets(&mut seg.label_offsets, row, r.len(), one.labels.len());
         let r = at(&seg.feature_offsets);
         terms_changed |= seg.feature_keys[r.clone()] != one.feature_keys[..];
-        seg.feature_keys[r.clone()].copy_from_slice(&one.feature_keys);
-        seg.feature_kinds[r.clone()].copy_from_slice(&one.feature_kinds);
-        seg.feature_bits[r].copy_from_slice(&one.feature_bits);
+        splice(&mut seg.feature_keys, r.clone(), &one.feature_keys);
+        splice(&mut seg.feature_kinds, r.clone(), &one.feature_kinds);
+        splice(&mut seg.feature_bits, r.clone(), &one.feature_bits);
+        shift_offsets(
+            &mut seg.feature_offsets,
+            row,
+            r.len(),
+            one.feature_keys.len(),
+        );
         let r = at(&seg.point_offsets);
-        seg.points[r].copy_from_slice(&one.points);
+        splice(&mut seg.points, r.clone(), points);
+        shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
         let r = at(&seg.child_offsets);
-        seg.children[r].copy_from_slice(&one.children);
+        splice(&mut seg.children, r.clone(), &one.children);
+        shift_offsets(&mut seg.child_offsets, row, r.len(), one.children.len());
         let r = at(&seg.out_offsets);
-        seg.out_targets[r.clone()].copy_from_slice(&one.out_targets);
-        seg.out_descriptions[r].copy_from_slice(&one.out_descriptions);
+        splice(&mut seg.out_targets, r.clone(), &one.out_targets);
+        splice(&mut seg.out_descriptions, r.clone(), &one.out_descriptions);
+        shift_offsets(&mut seg.out_offsets, row, r.len(), one.out_targets.len());
         let r = at(&seg.in_offsets);
-        seg.in_sources[r.clone()].copy_from_slice(&one.in_sources);
-        seg.in_descriptions[r].copy_from_slice(&one.in_descriptions);
+        splice(&mut seg.in_sources, r.clone(), &one.in_sources);
+        splice(&mut seg.in_descriptions, r.clone(), &one.in_descriptions);
+        shift_offsets(&mut seg.in_offsets, row, r.len(), one.in_sources.len());
         seg.parents[row] = one.parents[0];
         match (
             seg.aabb_rows.binary_search(&(row as u32)),
@@ -365,15 +387,29 @@ fn rows_in_place(
             (Err(_), None) => {}
         }
     }
-    if let Some(cut) = cut_at {
-        let rows = seg.ids.len();
-        seg.truncate_rows(cut);
-        for (row, &id) in ids.iter().enumerate().take(rows).skip(cut) {
-            graph.push_row(seg, table, &graph.nodes[&NodeId(id)], row as u32, ids);
-        }
-        seg.ids.extend_from_slice(&ids[cut..rows]);
-    }
     Some(terms_changed)
+}
+
+/// Replaces `values[range]` by `new`: the common prefix is overwritten, and the rest
+/// inserted or removed (moving the tail once).
+fn splice<T: Copy>(values: &mut Vec<T>, range: Range<usize>, new: &[T]) {
+    let common = range.len().min(new.len());
+    values[range.start..range.start + common].copy_from_slice(&new[..common]);
+    if new.len() > common {
+        values.splice(range.end..range.end, new[common..].iter().copied());
+    } else if range.len() > common {
+        values.drain(range.start + common..range.end);
+    }
+}
+
+/// Shifts the offsets after row `row` of a CSR column whose row went from `old_len` to
+/// `new_len` entries.
+fn shift_offsets(offsets: &mut [u32], row: usize, old_len: usize, new_len: usize) {
+    if old_len != new_len {
+        for o in &mut offsets[row + 1..] {
+            *o = (*o as usize + new_len - old_len) as u32;
+        }
+    }
 }
 
 impl LayerSegment {

@@ -24,12 +24,14 @@
 //!
 //! # Modules
 //! `schema` (the archived types), `archive` (archiving the live graph), `cache`
-//! (incremental segments for a publishing writer), `file` (`.ygg` files), `validate`
+//! (incremental segments for a publishing writer), `index_patch` (its patched layer
+//! indexes), `file` (`.ygg` files), `validate`
 //! (checking untrusted bytes), `view` ([`ArchivedScene`]).
 
 mod archive;
 mod cache;
 mod file;
+mod index_patch;
 mod schema;
 mod validate;
 mod view;
@@ -38,8 +40,9 @@ pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
 pub use file::{FILE_MAGIC, SnapshotFile};
 pub use schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer, ArchivedNodeIndexSegment,
-    FORMAT_VERSION, LayerSegment, Manifest, ManifestLayer, NodeIndexSegment,
+    ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
+    ArchivedNodeIndexSegment, FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest,
+    ManifestLayer, NodeIndexSegment,
 };
 pub use validate::{
     check_layer, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,

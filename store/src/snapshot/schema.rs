@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -73,11 +73,32 @@ pub struct LayerSegment {
     pub key_index: HashMap<String, [u32; 2]>,
     /// Rows per feature key, ascending.
     pub key_postings: Vec<u32>,
-    /// The layer index, if enabled: a kd-tree over every point of the layer whose items
-    /// are rows.
-    pub layer_index: Option<KdTree>,
+    /// The layer index, if enabled: a kd-tree over the layer's points whose items are
+    /// rows, patched by the rows changed since it was built.
+    pub layer_index: Option<LayerIndexSegment>,
     /// The node indexes rooted at nodes of this layer, ascending by root.
     pub node_indexes: Vec<NodeIndexSegment>,
+}
+
+/// A layer index as archived: a base kd-tree plus the rows patched since it was built,
+/// so that a small change republishes the rows, not a rebuilt tree.
+///
+/// The index's entries are the base tree's entries whose row is neither patched nor at
+/// or past the layer's row count, plus every point of every patched row, read from the
+/// layer's `points` column (a patched row's base entries are dead). A publishing writer
+/// folds the patch into a new base past a budget (`SegmentCache`); a fresh build has an
+/// empty patch.
+#[derive(Archive, Serialize, Debug)]
+pub struct LayerIndexSegment {
+    /// Rows of the layer when `tree` was built: every item of `tree` is below it.
+    pub base_rows: u32,
+    /// Points in `tree`.
+    pub base_points: u32,
+    /// The kd-tree over the points the rows had when it was built; items are rows.
+    pub tree: KdTree,
+    /// Rows whose points may differ from their base entries, ascending, each below the
+    /// layer's row count; every row at or past `base_rows` with points is listed.
+    pub patched: Vec<u32>,
 }
 
 /// A node index as archived in its root's layer segment.

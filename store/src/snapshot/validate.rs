@@ -206,8 +206,26 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
 /// The spatial part of [`check_layer`]: every kd-tree passes [`check_tree`] with items
 /// bounded by its id table, and node indexes are rooted at this layer's nodes.
 fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), String> {
-    if let Some(tree) = l.layer_index.as_ref() {
-        check_tree(tree, ids.len()).map_err(|e| format!("layer index: {e}"))?;
+    if let Some(index) = l.layer_index.as_ref() {
+        let base_rows = index.base_rows.to_native() as usize;
+        check_tree(&index.tree, base_rows).map_err(|e| format!("layer index: {e}"))?;
+        if index.tree.size() != index.base_points.to_native() as usize {
+            return Err("layer index: base point count differs from its tree".into());
+        }
+        let patched = u32s(&index.patched);
+        if !patched.windows(2).all(|w| w[0] < w[1])
+            || patched.last().is_some_and(|&r| r as usize >= ids.len())
+        {
+            return Err("layer index: patched rows unsorted or out of range".into());
+        }
+        let offsets = u32s(&l.point_offsets);
+        let unlisted = (base_rows..ids.len())
+            .find(|&r| offsets[r] != offsets[r + 1] && patched.binary_search(&(r as u32)).is_err());
+        if let Some(row) = unlisted {
+            return Err(format!(
+                "layer index: row {row}, added since its base, is not patched"
+            ));
+        }
     }
     let mut previous = None;
     for ni in l.node_indexes.iter() {

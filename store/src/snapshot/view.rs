@@ -3,7 +3,7 @@
 use super::schema::{ArchivedLayerSegment, ArchivedManifest, NO_PARENT, u32s, u64s};
 use super::validate::check_dag;
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
-use crate::index::{ArchivedIndex, SpatialIndex};
+use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
 use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
 use rkyv::collections::swiss_table::ArchivedHashMap;
@@ -349,11 +349,16 @@ impl SceneView for ArchivedScene<'_> {
 
     fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
         let (_, seg) = self.segment(layer)?;
-        // `check_layer` bounded the tree's items by the layer's rows.
-        Some(ArchivedIndex::new(
-            seg.layer_index.as_ref()?,
-            u64s(&seg.ids),
-        ))
+        let index = seg.layer_index.as_ref()?;
+        let patch = RowPatch::new(
+            index.base_rows.to_native(),
+            u32s(&index.patched),
+            u32s(&seg.point_offsets),
+            bytemuck::cast_slice(seg.points.as_slice()),
+        );
+        // `check_layer` bounded the tree's items by its base rows, and the patched rows
+        // by the layer's rows.
+        Some(ArchivedIndex::patched(&index.tree, u64s(&seg.ids), patch))
     }
 
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {

@@ -1,0 +1,194 @@
+//! Patching a cached segment's layer index ([`LayerIndexSegment`]) instead of rebuilding
+//! its kd-tree, for [`super::SegmentCache`].
+//!
+//! A row whose points changed since the base tree was built is listed as patched (its
+//! base entries die, its points are read from the point column); rows removed from the
+//! end die by the row count. The patch costs queries a scan of its points and the walk
+//! the dead entries it skips, so past a budget it is **folded**: the tree is rebuilt
+//! from the current rows and the patch emptied.
+//!
+//! # Policy
+//! Fold once the patch's live points (every point of a patched row) plus the base
+//! entries it killed exceed `max(FOLD_MIN, base points / 8)`. A row moved again and
+//! again costs its points once, so a node that keeps moving never forces a fold. Worst
+//! case for one publish: a fold, i.e. one full rebuild of the tree (what every change
+//! cost before). Amortised: a fold follows at least `max(FOLD_MIN, n / 8)` changed
+//! points, so a layer of `n` points pays at most 8 rebuilds' worth of
+//! `O(n log n) / n` per changed point, and a query scans at most the budget's points
+//! beyond the tree.
+
+use super::schema::{LayerIndexSegment, LayerSegment};
+use crate::{LayerId, NodeId, SceneGraph};
+
+/// Fewest changed points a layer index absorbs before it is folded.
+const FOLD_MIN: usize = 1024;
+
+/// Rows of a layer whose points changed in one build, found before the rows are
+/// rewritten: `rows` (old rows whose points differ, and every appended row) and the
+/// base entries those changes killed.
+#[derive(Debug, Default)]
+pub(super) struct PointChanges {
+    rows: Vec<u32>,
+    killed: usize,
+}
+
+impl PointChanges {
+    /// Changes in `old`'s rows `dirty_rows` (their new content is the graph's node with
+    /// the id at that row in `ids`) and rows `old.ids.len()..ids.len()` appended, after
+    /// `cut_points` points were cut from `old`'s end ([`PointChanges::points_from`]).
+    /// `old` still holds its previous rows and layer index.
+    pub(super) fn find(
+        graph: &SceneGraph,
+        old: &LayerSegment,
+        dirty_rows: &[usize],
+        ids: &[u64],
+        cut_points: usize,
+    ) -> Self {
+        let Some(index) = old.layer_index.as_ref() else {
+            return PointChanges::default();
+        };
+        let mut c = PointChanges {
+            rows: Vec::new(),
+            killed: cut_points,
+        };
+        for &row in dirty_rows {
+            let r = old.point_offsets[row] as usize..old.point_offsets[row + 1] as usize;
+            let new = &graph.nodes[&NodeId(ids[row])].points;
+            let same = old.points[r.clone()].len() == new.len()
+                && old.points[r.clone()]
+                    .iter()
+                    .zip(new)
+                    .all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits));
+            if !same {
+                c.note(index, row as u32, r.len());
+            }
+        }
+        c.rows.extend(old.ids.len() as u32..ids.len() as u32);
+        c
+    }
+
+    /// Points of `old`'s rows from `from` on, about to be cut (nodes removed from the
+    /// end; their base entries die), when `old` has a layer index.
+    pub(super) fn points_from(old: &LayerSegment, from: usize) -> usize {
+        match old.layer_index.as_ref() {
+            Some(_) => old.points.len() - old.point_offsets[from] as usize,
+            None => 0,
+        }
+    }
+
+    /// Row `row`, holding `old_points` points before, changed.
+    fn note(&mut self, index: &LayerIndexSegment, row: u32, old_points: usize) {
+        if row < index.base_rows && index.patched.binary_search(&row).is_err() {
+            self.killed += old_points;
+        }
+        self.rows.push(row);
+    }
+}
+
+/// Brings the layer index of `s` (rows up to date, index as it was) up to date after
+/// `changes`, by patching it or, past the budget, folding it (see the module docs);
+/// `killed` counts the base entries the patch killed so far and is reset by a fold.
+pub(super) fn update_layer_index(
+    graph: &SceneGraph,
+    layer: LayerId,
+    s: &mut LayerSegment,
+    changes: PointChanges,
+    killed: &mut usize,
+) {
+    let Some(mut index) = s.layer_index.take() else {
+        s.layer_index = graph.archived_layer_index(layer, s);
+        *killed = 0;
+        return;
+    };
+    let rows = s.ids.len() as u32;
+    let offsets = &s.point_offsets;
+    let has_points = |row: u32| offsets[row as usize] != offsets[row as usize + 1];
+    index.patched.retain(|&r| r < rows);
+    index.patched.extend(
+        changes
+            .rows
+            .into_iter()
+            .filter(|&r| r < index.base_rows || has_points(r)),
+    );
+    index.patched.sort_unstable();
+    index.patched.dedup();
+    *killed += changes.killed;
+    let live: usize = index
+        .patched
+        .iter()
+        .map(|&r| (offsets[r as usize + 1] - offsets[r as usize]) as usize)
+        .sum();
+    if *killed + live > FOLD_MIN.max(index.base_points as usize / 8) {
+        s.layer_index = graph.archived_layer_index(layer, s);
+        *killed = 0;
+    } else {
+        s.layer_index = Some(index);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::snapshot::SegmentCache;
+
+    /// A layer of `nodes` nodes with `per` points each, indexed.
+    fn indexed_layer(nodes: u64, per: usize) -> (SceneGraph, LayerId) {
+        let mut g = SceneGraph::new();
+        let l = g.add_layer("mesh").unwrap();
+        for i in 0..nodes {
+            g.add_node(NodeId(i), l).unwrap();
+            let points = (0..per).map(|k| [i as f32, k as f32, 0.0]).collect();
+            g.set_geometry(NodeId(i), points).unwrap();
+        }
+        g.enable_layer_index(l).unwrap();
+        (g, l)
+    }
+
+    fn index(cache: &mut SegmentCache, g: &mut SceneGraph, l: LayerId) -> (u32, Vec<u32>) {
+        let s = cache.layer_segment(g, l);
+        let i = s.layer_index.as_ref().unwrap();
+        assert_eq!(
+            s.layer_index_entries(),
+            g.layer_segment(l).layer_index_entries()
+        );
+        (i.base_rows, i.patched.clone())
+    }
+
+    #[test]
+    fn moves_and_appends_patch_the_index_until_the_budget_folds_it() {
+        let (mut g, l) = indexed_layer(100, 50);
+        let mut cache = SegmentCache::new();
+        assert_eq!(index(&mut cache, &mut g, l), (100, vec![]));
+        // A node moved: its row is patched, the base tree stays.
+        let moved: Vec<_> = (0..50).map(|k| [7.5, k as f32, 1.0]).collect();
+        g.set_geometry(NodeId(7), moved.clone()).unwrap();
+        assert_eq!(index(&mut cache, &mut g, l), (100, vec![7]));
+        // Moved again: still one row; a label change patches nothing.
+        g.set_geometry(NodeId(7), moved.iter().map(|p| [p[0], p[1], 2.0]).collect())
+            .unwrap();
+        g.add_label(NodeId(8), "chair").unwrap();
+        assert_eq!(index(&mut cache, &mut g, l), (100, vec![7]));
+        // Appended rows are patched; removed ones leave the list.
+        g.add_node(NodeId(500), l).unwrap();
+        g.set_geometry(NodeId(500), vec![[0.0; 3]]).unwrap();
+        g.add_node(NodeId(501), l).unwrap();
+        assert_eq!(index(&mut cache, &mut g, l), (100, vec![7, 100]));
+        g.remove_node(NodeId(501)).unwrap();
+        g.remove_node(NodeId(500)).unwrap();
+        assert_eq!(index(&mut cache, &mut g, l), (100, vec![7]));
+        // Past the budget (1024 changed points: a row costs its dead and its live points)
+        // the index is folded into a new base.
+        let mut folded = false;
+        for i in 10..30 {
+            g.set_geometry(NodeId(i), vec![[i as f32, 0.5, 3.0]; 50])
+                .unwrap();
+            let (base_rows, patched) = index(&mut cache, &mut g, l);
+            assert_eq!(base_rows, 100);
+            if patched.is_empty() {
+                folded = true;
+                break;
+            }
+        }
+        assert!(folded, "the patch was never folded");
+    }
+}
