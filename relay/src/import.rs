@@ -179,11 +179,13 @@ impl Importer<'_> {
         }
         match self.assembler.take_cut() {
             Some(cut) => self.publish(&cut),
-            None => Ok(()),
+            // Segments are put before the manifest naming them: one missing now is lost.
+            None => self.retry_gap(),
         }
     }
 
-    /// Asks again for the snapshot while the newest manifest lacks segments.
+    /// Asks for the snapshot while the newest manifest lacks segments (at most every
+    /// [`QUERY_INTERVAL`]).
     fn retry_gap(&mut self) -> Result<(), String> {
         let missing = self.assembler.missing();
         if let Some(first) = missing.first() {
