@@ -27,11 +27,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use ygg_dsg::layout::{self, LayerRole, Layout};
+use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::office::{OfficeParams, generate};
 use ygg_dsg::replay::SlamReplay;
 use ygg_reader::{SceneReader, SceneReceiveError};
@@ -221,35 +220,39 @@ fn ip(args: &[&str]) -> Result<(), String> {
     }
 }
 
-/// The `ygg-relay` binary beside the testkit's binaries, built once for this profile.
+/// The `ygg-relay` binary beside the testkit's binaries; built once for this profile
+/// when run by cargo (`cargo run -p ygg-bench -- remote`).
 fn relay_binary() -> Result<PathBuf, String> {
-    static BUILT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
-    BUILT
-        .get_or_init(|| {
-            let writer = ygg_testkit::binary("ygg-writer");
-            let dir = writer.parent().ok_or("no binary directory")?;
-            let relay = dir.join("ygg-relay");
-            let release = dir.file_name().is_some_and(|n| n == "release");
-            let mut build = Command::new(std::env::var_os("CARGO").unwrap_or("cargo".into()));
-            build.args(["build", "-p", "ygg-relay", "--bins"]);
-            if release {
-                build.arg("--release");
-            }
-            if let Some(target) = dir.parent() {
-                build.env("CARGO_TARGET_DIR", target);
-            }
-            let built = build
-                .output()
-                .map_err(|e| format!("cargo build -p ygg-relay: {e}"))?;
-            if !built.status.success() && !relay.is_file() {
-                return Err(format!(
-                    "cargo build -p ygg-relay failed:\n{}",
-                    String::from_utf8_lossy(&built.stderr)
-                ));
-            }
-            Ok(relay)
-        })
-        .clone()
+    let writer = ygg_testkit::binary("ygg-writer");
+    let dir = writer.parent().ok_or("no binary directory")?;
+    let relay = dir.join("ygg-relay");
+    if let Some(cargo) = std::env::var_os("CARGO") {
+        let mut build = Command::new(cargo);
+        build.args(["build", "-p", "ygg-relay", "--bins"]);
+        if dir.file_name().is_some_and(|n| n == "release") {
+            build.arg("--release");
+        }
+        if let Some(target) = dir.parent() {
+            build.env("CARGO_TARGET_DIR", target);
+        }
+        let built = build
+            .output()
+            .map_err(|e| format!("cargo build -p ygg-relay: {e}"))?;
+        if !built.status.success() {
+            return Err(format!(
+                "cargo build -p ygg-relay failed:\n{}",
+                String::from_utf8_lossy(&built.stderr)
+            ));
+        }
+    }
+    if relay.is_file() {
+        Ok(relay)
+    } else {
+        Err(format!(
+            "{} not found: cargo build --release -p ygg-relay",
+            relay.display()
+        ))
+    }
 }
 
 /// One JSON row.
@@ -452,16 +455,10 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     eprintln!("pose_update done");
 
     // One-object moves.
-    let objects = layout::layer_with_role(relay.writer.graph(), LayerRole::Objects)
-        .map(|l| {
-            let g = relay.writer.graph();
-            g.layer_nodes(l).map(|n| g.node_id(n)).collect::<Vec<_>>()
-        })
-        .unwrap_or_default();
-    let object = objects
-        .iter()
-        .copied()
-        .find(|&o| !children(relay.writer.graph(), o).is_empty())
+    let g = relay.writer.graph();
+    let object = layout::object_mesh_layers(g)
+        .into_iter()
+        .find_map(|(l, _)| g.layer_nodes(l).find_map(|m| g.parent(m)))
         .ok_or("no object with a mesh")?;
     let (mut lat, mut bytes) = (Vec::new(), Vec::new());
     for k in 0..updates {
