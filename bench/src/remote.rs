@@ -17,7 +17,7 @@
 //! * `resync_full_office`: the link taken down until the remote reader reports the writer
 //!   gone, one update published meanwhile, the link brought up: link up → the remote
 //!   reader holds the new snapshot; bytes of the resync.
-//! * `stream_bytes_ygg`: the demo's SLAM stream at 30 Hz for `--seconds`; latency of every
+//! * `stream_bytes_ygg`: the demo's SLAM stream at 30 Hz (20 s, 3 s with `--quick`); latency of every
 //!   tick and bytes per tick.
 //! * `stream_bytes_spark_dsg_zmq`: the same number of ticks as full-graph messages of the
 //!   same office (with mesh) through spark_dsg's sender and receiver, each after the
@@ -289,10 +289,34 @@ struct Relay<'a> {
     writer: SceneWriter,
     reader: SceneReader,
     exporter: Proc,
-    _importer: Proc,
+    importer: Proc,
 }
 
 impl Relay<'_> {
+    /// Stops the relays with SIGTERM (so the importer removes its shared memory), then the
+    /// reader and the writer.
+    fn stop(self) {
+        let Self {
+            writer,
+            reader,
+            mut exporter,
+            mut importer,
+            ..
+        } = self;
+        for proc in [&mut importer, &mut exporter] {
+            proc.signal(rustix::process::Signal::TERM);
+            if proc.wait_timeout(Duration::from_secs(10)).is_none() {
+                eprintln!(
+                    "warning: {} did not stop: {}",
+                    proc.label(),
+                    proc.describe()
+                );
+            }
+        }
+        drop(reader);
+        drop(writer);
+    }
+
     /// Publishes what changed; waits until the remote reader holds that generation.
     /// Returns publish start → remote visible, in seconds, and the wire bytes.
     fn publish_and_wait(&mut self, t0: Instant) -> Result<(f64, u64), Box<dyn std::error::Error>> {
@@ -429,7 +453,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         writer,
         reader,
         exporter,
-        _importer: importer,
+        importer,
     };
     relay.wait_for(first, t0)?;
     eprintln!(
@@ -513,7 +537,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         total as f64 / ticks as f64,
     ));
     eprintln!("stream_bytes_ygg done");
-    drop(relay);
+    relay.stop();
 
     // spark_dsg's full-graph stream over the same link, for the same number of edits.
     let zmq_endpoint = format!("tcp://{}:{ZMQ_PORT}", link.addr[0]);
