@@ -6,6 +6,7 @@ mod dsg_io;
 mod hydra;
 mod ipc;
 mod ladder;
+mod remote;
 mod soak;
 
 use clap::{Parser, Subcommand};
@@ -47,6 +48,9 @@ enum Command {
     /// FFI overhead of the C API: the SLAM-style stream published from C++ (through the
     /// C API) and from Rust, side by side (bench/results/capi.md).
     Capi(capi::CapiArgs),
+    /// Readers on another host: writer -> ygg-relay over a veth pair between two network
+    /// namespaces -> remote reader, against spark_dsg's ZMQ full-graph stream (needs root).
+    Remote(remote::RemoteArgs),
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -61,6 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Capi(args) => capi::run(&args),
         Command::Hydra(args) => hydra::run(&args),
         Command::HydraReader(args) => hydra::run_reader(&args),
+        Command::Remote(args) => remote::run(&args),
     }
 }
 

@@ -1,0 +1,73 @@
+//! `ygg-relay`: readers on other hosts through Zenoh.
+//!
+//! `export` follows a scene in this host's shared memory and puts each changed segment and
+//! each manifest on Zenoh as the same archived bytes; `import` validates what arrives and
+//! republishes complete cuts into the other host's shared memory, where readers attach as
+//! to any local writer. See [`keys`] for the key layout.
+
+mod cut;
+mod export;
+mod import;
+mod keys;
+mod network;
+mod put;
+
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "ygg-relay",
+    version,
+    about = "Relays a Yggdrasil scene between hosts through Zenoh"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Put a local scene on Zenoh: each changed segment and each manifest, the same bytes
+    /// as in shared memory; answer queries for the current snapshot.
+    ///
+    /// Prints `sent generation=N ...` per snapshot and `writer gone` when the local writer
+    /// exits. Runs until SIGINT/SIGTERM.
+    Export(export::ExportArgs),
+    /// Republish a scene from Zenoh into local shared memory: validate every segment and
+    /// manifest, publish only complete cuts, resync by query on a gap or a new exporter.
+    ///
+    /// Prints `published generation=N ...` per cut, `writer gone; ...` when the exporter,
+    /// its writer or the link goes, `dropped key=...` for invalid data. Runs until
+    /// SIGINT/SIGTERM.
+    Import(import::ImportArgs),
+    /// Put raw bytes on a Zenoh key once (to check what an importer does with them).
+    Put(put::PutArgs),
+}
+
+fn main() -> ExitCode {
+    ygg_transport::init_iceoryx_logging();
+    let cli = Cli::parse();
+    let _ = ygg_transport::limits::raise_open_file_limit();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed)) {
+        eprintln!("ygg-relay: error: cannot install the signal handler: {e}");
+        return ExitCode::FAILURE;
+    }
+    let result = match &cli.command {
+        Command::Export(args) => export::run(args, &stop),
+        Command::Import(args) => import::run(args, &stop),
+        Command::Put(args) => put::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("ygg-relay: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

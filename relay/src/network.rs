@@ -1,0 +1,122 @@
+//! The Zenoh session of a relay: explicit endpoints, no multicast scouting, and short
+//! leases and reconnect periods so that a broken link is noticed and healed within about a
+//! second.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+/// How a relay joins the Zenoh network (shared by `export`, `import` and `put`).
+#[derive(Args, Debug, Clone)]
+pub struct NetworkArgs {
+    /// Zenoh endpoint to connect to, e.g. `tcp/10.0.0.1:7447` (repeatable).
+    #[arg(long = "connect", value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// Zenoh endpoint to listen on, e.g. `tcp/10.0.0.1:7447` (repeatable).
+    #[arg(long = "listen", value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// Zenoh mode: `peer`, `client` or `router`.
+    #[arg(long, default_value = "peer", value_parser = ["peer", "client", "router"])]
+    pub mode: String,
+    /// Link lease in milliseconds: a peer silent this long is taken as gone (Zenoh's
+    /// `transport/link/tx/lease`).
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(100..=600_000))]
+    pub lease_ms: u64,
+    /// A Zenoh JSON5 configuration file applied first; the options above override it.
+    #[arg(long, value_name = "FILE")]
+    pub zenoh_config: Option<PathBuf>,
+}
+
+impl NetworkArgs {
+    /// The Zenoh configuration these arguments describe. Multicast scouting and gossip are
+    /// off: a relay talks only to the endpoints it is given.
+    ///
+    /// # Errors
+    /// A message naming the option or file Zenoh rejected.
+    pub fn config(&self) -> Result<zenoh::Config, String> {
+        if self.connect.is_empty() && self.listen.is_empty() {
+            return Err(
+                "give at least one --connect or --listen endpoint (e.g. --listen tcp/10.0.0.1:7447)"
+                    .into(),
+            );
+        }
+        let mut config = match &self.zenoh_config {
+            Some(path) => zenoh::Config::from_file(path)
+                .map_err(|e| format!("--zenoh-config {}: {e}", path.display()))?,
+            None => zenoh::Config::default(),
+        };
+        let json = |values: &[String]| {
+            let quoted: Vec<String> = values.iter().map(|v| format!("{v:?}")).collect();
+            format!("[{}]", quoted.join(","))
+        };
+        let lease = self.lease_ms;
+        // Reconnect quickly after a link comes back (the default backs off to 4 s).
+        let retry = "{period_init_ms: 100, period_max_ms: 250, period_increase_factor: 1.5}";
+        let settings = [
+            ("mode", format!("{:?}", self.mode), "--mode"),
+            ("connect/endpoints", json(&self.connect), "--connect"),
+            ("listen/endpoints", json(&self.listen), "--listen"),
+            ("connect/retry", retry.to_owned(), "connect/retry"),
+            ("connect/timeout_ms", "-1".to_owned(), "connect/timeout_ms"),
+            ("scouting/multicast/enabled", "false".to_owned(), "scouting"),
+            ("scouting/gossip/enabled", "false".to_owned(), "scouting"),
+            ("transport/link/tx/lease", lease.to_string(), "--lease-ms"),
+        ];
+        for (key, value, option) in settings {
+            // An empty list keeps what the file says.
+            if value == "[]" {
+                continue;
+            }
+            config
+                .insert_json5(key, &value)
+                .map_err(|e| format!("{option}: zenoh refused {key} = {value}: {e}"))?;
+        }
+        Ok(config)
+    }
+
+    /// Opens the Zenoh session.
+    ///
+    /// # Errors
+    /// A message naming the configuration problem or why Zenoh could not start (for
+    /// example a `--listen` address this host does not have).
+    pub fn open(&self) -> Result<zenoh::Session, String> {
+        use zenoh::Wait as _;
+        let config = self.config()?;
+        zenoh::open(config)
+            .wait()
+            .map_err(|e| format!("cannot open the zenoh session: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(connect: &[&str], listen: &[&str]) -> NetworkArgs {
+        NetworkArgs {
+            connect: connect.iter().map(|s| (*s).to_owned()).collect(),
+            listen: listen.iter().map(|s| (*s).to_owned()).collect(),
+            mode: "peer".into(),
+            lease_ms: 1000,
+            zenoh_config: None,
+        }
+    }
+
+    #[test]
+    fn endpoints_are_required_and_checked() {
+        assert!(args(&[], &[]).config().unwrap_err().contains("--connect"));
+        let err = args(&["nonsense"], &[]).config().unwrap_err();
+        assert!(err.contains("--connect"), "{err}");
+        let config = args(&["tcp/10.0.0.1:7447"], &["tcp/10.0.0.2:7447"])
+            .config()
+            .expect("valid endpoints");
+        let multicast = config.get_json("scouting/multicast/enabled").expect("key");
+        assert_eq!(multicast, "false");
+        assert!(
+            config
+                .get_json("connect/endpoints")
+                .expect("key")
+                .contains("10.0.0.1")
+        );
+    }
+}

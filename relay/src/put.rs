@@ -1,0 +1,57 @@
+//! `ygg-relay put`: puts raw bytes on a Zenoh key (for checking what importers do with
+//! foreign data on their key).
+
+use std::io::Read;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::Args;
+use zenoh::Wait as _;
+
+use crate::network::NetworkArgs;
+
+/// Arguments of `ygg-relay put`.
+#[derive(Args, Debug)]
+pub struct PutArgs {
+    /// The full Zenoh key to put on.
+    #[arg(long)]
+    pub key: String,
+    /// File whose bytes to put; `-` or absent reads standard input.
+    #[arg(long)]
+    pub file: Option<PathBuf>,
+    /// Milliseconds to wait for the peers to connect before putting.
+    #[arg(long, default_value_t = 1000)]
+    pub settle_ms: u64,
+    /// How Zenoh connects.
+    #[command(flatten)]
+    pub network: NetworkArgs,
+}
+
+/// Puts the bytes once and exits.
+///
+/// # Errors
+/// An unreadable file, an invalid key, or a Zenoh session that cannot open.
+pub fn run(args: &PutArgs) -> Result<(), String> {
+    let mut payload = Vec::new();
+    match &args.file {
+        Some(path) if path.as_os_str() != "-" => {
+            payload = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        _ => {
+            std::io::stdin()
+                .read_to_end(&mut payload)
+                .map_err(|e| format!("<stdin>: {e}"))?;
+        }
+    }
+    let session = args.network.open()?;
+    std::thread::sleep(Duration::from_millis(args.settle_ms));
+    session
+        .put(&args.key, payload.clone())
+        .wait()
+        .map_err(|e| format!("--key {:?}: {e}", args.key))?;
+    println!("put key={} bytes={}", args.key, payload.len());
+    session
+        .close()
+        .wait()
+        .map_err(|e| format!("closing the zenoh session: {e}"))
+}

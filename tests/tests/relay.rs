@@ -1,0 +1,676 @@
+//! `ygg-relay` across two real network stacks: two network namespaces joined by a veth
+//! pair, the writer and `ygg-relay export` in one, `ygg-relay import` and the readers in the
+//! other, Zenoh with explicit endpoints on the pair's addresses and scouting off.
+//!
+//! Each side has its own iceoryx2 prefix (its own "host"), so the remote readers can only
+//! see what crossed the link. The tests create the namespaces and tear them down
+//! themselves (also on failure), and skip with a message when not root or `ip` (iproute2)
+//! is missing.
+
+use std::collections::BTreeMap;
+use std::hash::{DefaultHasher, Hash, Hasher};
+use std::path::PathBuf;
+use std::process::Command;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::time::{Duration, Instant};
+
+use rustix::process::Signal;
+use ygg_testkit::{Proc, TestScene, Watchdog, binary, field};
+use ygg_transport::{ReceiveError, Snapshot, SubscriberBuilder};
+
+/// Generous bound for one step (debug builds on a busy 2-core machine).
+const STEP: Duration = Duration::from_secs(60);
+/// Per-test watchdog.
+const WATCHDOG: Duration = Duration::from_secs(240);
+/// Zenoh port the exporter listens on.
+const PORT: u16 = 7447;
+/// Zenoh port the importer listens on (for peers that put on its key).
+const IMPORT_PORT: u16 = 7448;
+
+/// Why the tests cannot create namespaces here, if they cannot.
+fn unsupported() -> Option<String> {
+    if !rustix::process::geteuid().is_root() {
+        return Some("not root: network namespaces need CAP_SYS_ADMIN".into());
+    }
+    match Command::new("ip").arg("-V").output() {
+        Ok(out) if out.status.success() => None,
+        _ => Some("`ip` (iproute2) is missing".into()),
+    }
+}
+
+/// Two network namespaces joined by a veth pair with a private /30; deleted on drop.
+struct Link {
+    ns: [String; 2],
+    veth: [String; 2],
+    addr: [String; 2],
+}
+
+impl Link {
+    /// Creates the pair, or `None` (after printing why) where that is impossible.
+    fn create() -> Option<Self> {
+        static COUNTER: AtomicU32 = AtomicU32::new(0);
+        if let Some(why) = unsupported() {
+            eprintln!("skipping the relay test: {why}");
+            return None;
+        }
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let pid = std::process::id();
+        // A /30 per process and test: 10.<100+n>.<pid / 64 % 256>.<pid % 64 * 4>.
+        let net = format!("10.{}.{}", 100 + n % 100, (pid / 64) % 256);
+        let host = (pid % 64) * 4;
+        let link = Self {
+            ns: [format!("yrA{pid}x{n}"), format!("yrB{pid}x{n}")],
+            veth: [format!("yra{pid}x{n}"), format!("yrb{pid}x{n}")],
+            addr: [format!("{net}.{}", host + 1), format!("{net}.{}", host + 2)],
+        };
+        let steps: Vec<Vec<String>> = vec![
+            vec!["netns".into(), "add".into(), link.ns[0].clone()],
+            vec!["netns".into(), "add".into(), link.ns[1].clone()],
+            vec![
+                "link".into(),
+                "add".into(),
+                link.veth[0].clone(),
+                "type".into(),
+                "veth".into(),
+                "peer".into(),
+                "name".into(),
+                link.veth[1].clone(),
+            ],
+        ];
+        for step in &steps {
+            if let Err(e) = ip(step) {
+                eprintln!("skipping the relay test: cannot set up namespaces: {e}");
+                return None;
+            }
+        }
+        for side in 0..2 {
+            let (ns, veth) = (&link.ns[side], &link.veth[side]);
+            for step in [
+                vec!["link", "set", veth, "netns", ns],
+                vec![
+                    "-n",
+                    ns,
+                    "addr",
+                    "add",
+                    &format!("{}/30", link.addr[side]),
+                    "dev",
+                    veth,
+                ],
+                vec!["-n", ns, "link", "set", veth, "up"],
+                vec!["-n", ns, "link", "set", "lo", "up"],
+            ] {
+                ip(&step).unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+        Some(link)
+    }
+
+    /// `program args` run inside namespace `side` (0: robot, 1: remote host), with
+    /// `scene`'s iceoryx2 prefix.
+    fn command(&self, side: usize, scene: &TestScene, program: &PathBuf, args: &[&str]) -> Command {
+        let mut command = Command::new("ip");
+        command
+            .args(["netns", "exec", &self.ns[side]])
+            .arg(program)
+            .args(args);
+        scene.configure(&mut command);
+        command
+    }
+
+    /// `tcp/<address of side>:<port>`.
+    fn endpoint(&self, side: usize, port: u16) -> String {
+        format!("tcp/{}:{port}", self.addr[side])
+    }
+
+    /// Takes the robot's end of the link down or up.
+    fn set_up(&self, up: bool) {
+        let state = if up { "up" } else { "down" };
+        ip(&["-n", &self.ns[0], "link", "set", &self.veth[0], state])
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        // Deleting a namespace deletes the veth end inside it, and so the pair.
+        for ns in &self.ns {
+            if let Err(e) = ip(&["netns", "del", ns]) {
+                eprintln!("warning: {e}");
+            }
+        }
+    }
+}
+
+/// Runs `ip args`.
+fn ip<S: AsRef<str>>(args: &[S]) -> Result<(), String> {
+    let args: Vec<&str> = args.iter().map(AsRef::as_ref).collect();
+    let out = Command::new("ip")
+        .args(&args)
+        .output()
+        .map_err(|e| format!("ip {}: {e}", args.join(" ")))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ip {}: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
+/// The `ygg-relay` binary of this profile, built once if run by cargo (the testkit builds
+/// only the writer, reader and bench binaries).
+fn relay_binary() -> PathBuf {
+    static BUILT: OnceLock<PathBuf> = OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            let dir = binary("ygg-writer")
+                .parent()
+                .expect("a binary lives in a directory")
+                .to_owned();
+            if let Some(cargo) = std::env::var_os("CARGO") {
+                let mut build = Command::new(cargo);
+                build.args(["build", "-p", "ygg-relay", "--bins"]);
+                match dir.file_name().and_then(|n| n.to_str()) {
+                    Some("release") => {
+                        build.arg("--release");
+                    }
+                    Some("debug") | None => {}
+                    Some(profile) => {
+                        build.args(["--profile", profile]);
+                    }
+                }
+                if let Some(target) = dir.parent() {
+                    build.env("CARGO_TARGET_DIR", target);
+                }
+                let out = build.output().expect("run cargo build -p ygg-relay");
+                assert!(
+                    out.status.success(),
+                    "cargo build -p ygg-relay failed:\n{}",
+                    String::from_utf8_lossy(&out.stderr)
+                );
+            }
+            dir.join("ygg-relay")
+        })
+        .clone()
+}
+
+/// The robot side's scene and the remote side's, each with its own prefix.
+struct Hosts {
+    link: Link,
+    robot: TestScene,
+    remote: TestScene,
+    key: String,
+}
+
+impl Hosts {
+    fn new(tag: &str) -> Option<Self> {
+        let link = Link::create()?;
+        let robot = TestScene::new(tag);
+        let remote = TestScene::new(tag);
+        let key = format!("test/{}", robot.name);
+        Some(Self {
+            link,
+            robot,
+            remote,
+            key,
+        })
+    }
+
+    /// `ygg-writer serve` of a small office on the robot at `rate` updates per second.
+    fn writer(&self, rate: &str, watchdog: &Watchdog) -> Proc {
+        let args = [
+            "serve",
+            "--scene",
+            &self.robot.name,
+            "--scale",
+            "0.05",
+            "--rate",
+            rate,
+        ];
+        let command = self
+            .link
+            .command(0, &self.robot, &binary("ygg-writer"), &args);
+        let writer = Proc::spawn(command, "writer", watchdog);
+        writer.expect_line(STEP, |l| l.contains("\"ready\""));
+        writer
+    }
+
+    /// `ygg-relay export` on the robot, listening on the robot's address.
+    fn exporter(&self, watchdog: &Watchdog) -> Proc {
+        let listen = self.link.endpoint(0, PORT);
+        let args = [
+            "export",
+            "--scene",
+            &self.robot.name,
+            "--key",
+            &self.key,
+            "--listen",
+            &listen,
+        ];
+        let command = self.link.command(0, &self.robot, &relay_binary(), &args);
+        Proc::spawn(command, "exporter", watchdog)
+    }
+
+    /// `ygg-relay import` on the remote host into `scene`, connecting to the exporter and
+    /// listening on the remote address.
+    fn importer(&self, scene: &TestScene, watchdog: &Watchdog) -> Proc {
+        let connect = self.link.endpoint(0, PORT);
+        let listen = self.link.endpoint(1, IMPORT_PORT);
+        let args = [
+            "import",
+            "--key",
+            &self.key,
+            "--scene",
+            &scene.name,
+            "--connect",
+            &connect,
+            "--listen",
+            &listen,
+        ];
+        let command = self.link.command(1, scene, &relay_binary(), &args);
+        Proc::spawn(command, "importer", watchdog)
+    }
+
+    /// `ygg-reader <args>` on the remote host, on `scene`.
+    fn remote_reader(&self, scene: &TestScene, args: &[&str], watchdog: &Watchdog) -> Proc {
+        let command = self.link.command(1, scene, &binary("ygg-reader"), args);
+        Proc::spawn(command, "remote reader", watchdog)
+    }
+}
+
+/// Stops a relay or writer with SIGTERM and asserts a clean exit.
+fn terminate(proc: &mut Proc) {
+    proc.signal(Signal::TERM);
+    let status = proc.wait_exit(STEP);
+    assert!(status.success(), "{}", proc.describe());
+}
+
+/// A digest of everything a snapshot carries: entries, every segment's bytes, the
+/// manifest bytes.
+fn digest(snapshot: &Snapshot) -> u64 {
+    let mut h = DefaultHasher::new();
+    for (entry, bytes) in snapshot.layers() {
+        (entry.layer_id, entry.generation, bytes).hash(&mut h);
+    }
+    snapshot.manifest_bytes().hash(&mut h);
+    h.finish()
+}
+
+/// Follows a scene in a thread, recording the digest of every snapshot by generation.
+struct Recorder {
+    digests: Arc<Mutex<BTreeMap<u64, u64>>>,
+    gone: Arc<AtomicU32>,
+    stop: Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Recorder {
+    fn start(scene: &TestScene) -> Self {
+        let mut reader = SubscriberBuilder::new(&scene.name)
+            .iceoryx_prefix(&scene.prefix)
+            .wait_for_writer(STEP)
+            .open()
+            .unwrap_or_else(|e| panic!("attach to {}: {e}", scene.name));
+        let digests: Arc<Mutex<BTreeMap<u64, u64>>> = Arc::default();
+        let gone = Arc::new(AtomicU32::new(0));
+        let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let (d, g, s) = (Arc::clone(&digests), Arc::clone(&gone), Arc::clone(&stop));
+        let thread = std::thread::spawn(move || {
+            while !s.load(Ordering::Relaxed) {
+                match reader.wait_next(Duration::from_millis(50)) {
+                    Ok(Some(snapshot)) => {
+                        let digest = digest(&snapshot);
+                        d.lock()
+                            .unwrap_or_else(PoisonError::into_inner)
+                            .insert(snapshot.generation(), digest);
+                    }
+                    Ok(None) => {}
+                    Err(ReceiveError::WriterGone { .. }) => {
+                        g.fetch_add(1, Ordering::Relaxed);
+                    }
+                    Err(e) => panic!("receive: {e}"),
+                }
+            }
+        });
+        Self {
+            digests,
+            gone,
+            stop,
+            thread: Some(thread),
+        }
+    }
+
+    fn digests(&self) -> BTreeMap<u64, u64> {
+        self.digests
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+    }
+
+    /// Waits until a generation above `after` was received; returns the newest.
+    fn wait_beyond(&self, after: u64) -> u64 {
+        let until = Instant::now() + STEP;
+        loop {
+            if let Some((&g, _)) = self.digests().last_key_value()
+                && g > after
+            {
+                return g;
+            }
+            assert!(Instant::now() < until, "no generation beyond {after}");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// Asserts that every generation both recorders saw has the same digest, and that they
+/// share at least `min` generations.
+fn assert_same_snapshots(local: &Recorder, remote: &Recorder, min: usize) {
+    let (local, remote) = (local.digests(), remote.digests());
+    let mut common = 0;
+    for (generation, digest) in &remote {
+        if let Some(expected) = local.get(generation) {
+            assert_eq!(digest, expected, "generation {generation} differs remotely");
+            common += 1;
+        }
+    }
+    assert!(
+        common >= min,
+        "only {common} common generations (local {}, remote {})",
+        local.len(),
+        remote.len()
+    );
+}
+
+/// Query lines for `ygg-reader query`.
+const QUERIES: &str = r#"{"op":"nearest_object","point":[1.0,2.0,0.5]}
+{"op":"objects_within","point":[3.0,3.0,1.0],"radius":2.0}
+{"op":"visible_objects","eye":[0.0,0.0,1.0],"dir":[1.0,0.0,0.0],"half_angle_deg":50,"range":8}
+{"op":"objects_with_label","label":"light"}
+"#;
+
+#[test]
+fn a_late_importer_resyncs_by_query_and_remote_answers_equal_local_ones() {
+    let Some(hosts) = Hosts::new("relay-static") else {
+        return;
+    };
+    let watchdog = Watchdog::new(WATCHDOG);
+    // A scene that does not change: the importer, started after the snapshot was put,
+    // can only get it by querying.
+    let mut writer = hosts.writer("0", &watchdog);
+    let mut exporter = hosts.exporter(&watchdog);
+    exporter.expect_line(STEP, |l| l.starts_with("sent generation=1 "));
+    let started = Instant::now();
+    let mut importer = hosts.importer(&hosts.remote, &watchdog);
+    importer.expect_line(STEP, |l| l.starts_with("published generation=1 "));
+    eprintln!("late importer consistent after {:?}", started.elapsed());
+    exporter.expect_line(STEP, |l| l.starts_with("answered query"));
+
+    let queries = std::env::temp_dir().join(format!("{}.jsonl", hosts.robot.name));
+    std::fs::write(&queries, QUERIES).expect("write queries");
+    let q = queries.to_str().expect("utf-8 path");
+    let answers = |side: usize, scene: &TestScene| {
+        let args = ["query", "--scene", &scene.name, "--queries", q];
+        let out = hosts
+            .link
+            .command(side, scene, &binary("ygg-reader"), &args)
+            .output()
+            .expect("run ygg-reader query");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let local = answers(0, &hosts.robot);
+    let remote = answers(1, &hosts.remote);
+    let _ = std::fs::remove_file(&queries);
+    assert_eq!(local.lines().count(), 4, "{local}");
+    assert!(
+        !local.contains("error") && local.lines().any(|l| !l.contains("\"ids\":[]")),
+        "{local}"
+    );
+    assert_eq!(remote, local, "the remote reader answers differently");
+
+    // The remote `inspect` works unchanged too.
+    let inspect = hosts
+        .link
+        .command(
+            1,
+            &hosts.remote,
+            &binary("ygg-reader"),
+            &["inspect", "--scene", &hosts.remote.name],
+        )
+        .output()
+        .expect("run ygg-reader inspect");
+    assert!(
+        inspect.status.success(),
+        "{}",
+        String::from_utf8_lossy(&inspect.stderr)
+    );
+
+    terminate(&mut importer);
+    terminate(&mut exporter);
+    terminate(&mut writer);
+    hosts.remote.assert_no_leftovers(Duration::from_secs(5));
+    hosts.robot.assert_no_leftovers(Duration::from_secs(5));
+}
+
+#[test]
+fn live_updates_cross_byte_for_byte_and_garbage_on_the_key_is_dropped() {
+    let Some(hosts) = Hosts::new("relay-live") else {
+        return;
+    };
+    let watchdog = Watchdog::new(WATCHDOG);
+    let mut writer = hosts.writer("20", &watchdog);
+    let mut exporter = hosts.exporter(&watchdog);
+    let mut importer = hosts.importer(&hosts.remote, &watchdog);
+    importer.expect_line(STEP, |l| l.starts_with("published generation="));
+    let local = Recorder::start(&hosts.robot);
+    let remote = Recorder::start(&hosts.remote);
+    let first = remote.wait_beyond(0);
+    remote.wait_beyond(first + 20);
+
+    // Garbage from another peer on the key: a segment, a manifest and a foreign key.
+    let session = "0123456789abcdef";
+    for (key, bytes) in [
+        (
+            format!("{}/{session}/0/999999", hosts.key),
+            vec![0xAB; 4096],
+        ),
+        (
+            format!("{}/{session}/manifest/999999", hosts.key),
+            vec![0xCD; 512],
+        ),
+        (format!("{}/not/a/segment", hosts.key), b"hello".to_vec()),
+    ] {
+        let file = std::env::temp_dir().join(format!("{}-garbage", hosts.robot.name));
+        std::fs::write(&file, &bytes).expect("write garbage");
+        let connect = hosts.link.endpoint(1, IMPORT_PORT);
+        let args = [
+            "put",
+            "--key",
+            &key,
+            "--file",
+            file.to_str().expect("utf-8"),
+            "--connect",
+            &connect,
+            "--settle-ms",
+            "500",
+        ];
+        let out = hosts
+            .link
+            .command(0, &hosts.robot, &relay_binary(), &args)
+            .output()
+            .expect("run ygg-relay put");
+        let _ = std::fs::remove_file(&file);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        importer.expect_line(STEP, |l| {
+            field(l, "key") == Some(key.as_str()) && l.starts_with("dropped")
+        });
+    }
+    let after_garbage = remote.digests().last_key_value().map_or(0, |(g, _)| *g);
+    remote.wait_beyond(after_garbage + 10);
+    assert_eq!(
+        remote.gone.load(Ordering::Relaxed),
+        0,
+        "garbage made the remote writer go"
+    );
+    assert_same_snapshots(&local, &remote, 20);
+
+    drop(remote);
+    drop(local);
+    terminate(&mut importer);
+    terminate(&mut exporter);
+    terminate(&mut writer);
+    hosts.remote.assert_no_leftovers(Duration::from_secs(5));
+    hosts.robot.assert_no_leftovers(Duration::from_secs(5));
+}
+
+#[test]
+fn link_down_up_and_a_killed_exporter_leave_remote_readers_stale_then_resync() {
+    let Some(hosts) = Hosts::new("relay-faults") else {
+        return;
+    };
+    let watchdog = Watchdog::new(WATCHDOG);
+    let mut writer = hosts.writer("10", &watchdog);
+    let mut exporter = hosts.exporter(&watchdog);
+    let mut importer = hosts.importer(&hosts.remote, &watchdog);
+    importer.expect_line(STEP, |l| l.starts_with("published generation="));
+    let local = Recorder::start(&hosts.robot);
+    let mut watch = hosts.remote_reader(
+        &hosts.remote,
+        &["watch", "--scene", &hosts.remote.name],
+        &watchdog,
+    );
+    watch.expect_line(STEP, |l| l.starts_with("snapshot "));
+
+    // Link down: the remote reader keeps its snapshot and reports the writer gone.
+    hosts.link.set_up(false);
+    let stale = watch.expect_line(STEP, |l| l.starts_with("writer gone; keeping generation="));
+    let kept: u64 = field(&stale, "generation")
+        .and_then(|g| g.parse().ok())
+        .expect("generation");
+    // Link up: a newer snapshot arrives, equal to the local one of that generation.
+    let seen = watch.count_lines(|_| true);
+    let up = Instant::now();
+    hosts.link.set_up(true);
+    let (_, line) = watch
+        .wait_line_after(seen, STEP, |l| {
+            l.starts_with("snapshot ")
+                && field(l, "generation").and_then(|g| g.parse::<u64>().ok()) > Some(kept)
+        })
+        .unwrap_or_else(|| panic!("no resync after link up: {}", watch.describe()));
+    eprintln!("resynced after link up in {:?}: {line}", up.elapsed());
+
+    // Exporter killed: the remote reader reports the writer gone; a restarted exporter
+    // is picked up.
+    let seen = watch.count_lines(|_| true);
+    exporter.kill();
+    watch
+        .wait_line_after(seen, STEP, |l| l.starts_with("writer gone"))
+        .unwrap_or_else(|| {
+            panic!(
+                "no writer gone after the exporter died: {}",
+                watch.describe()
+            )
+        });
+    let seen = watch.count_lines(|_| true);
+    let mut exporter = hosts.exporter(&watchdog);
+    watch
+        .wait_line_after(seen, STEP, |l| l.starts_with("snapshot "))
+        .unwrap_or_else(|| {
+            panic!(
+                "no snapshot from the restarted exporter: {}",
+                watch.describe()
+            )
+        });
+
+    // What the remote side holds now is what the robot published.
+    let remote = Recorder::start(&hosts.remote);
+    let newest = remote.wait_beyond(0);
+    remote.wait_beyond(newest + 5);
+    assert_same_snapshots(&local, &remote, 5);
+
+    drop(remote);
+    drop(local);
+    terminate(&mut watch);
+    terminate(&mut importer);
+    terminate(&mut exporter);
+    terminate(&mut writer);
+    hosts.remote.assert_no_leftovers(Duration::from_secs(5));
+    hosts.robot.assert_no_leftovers(Duration::from_secs(5));
+}
+
+#[test]
+fn bad_arguments_are_refused_with_a_clear_error() {
+    let relay = relay_binary();
+    for (args, says) in [
+        (
+            vec!["export", "--scene", "s", "--key", "a/b"],
+            "--connect or --listen",
+        ),
+        (
+            vec![
+                "export",
+                "--scene",
+                "s",
+                "--key",
+                "a/*",
+                "--listen",
+                "tcp/127.0.0.1:0",
+            ],
+            "--key",
+        ),
+        (
+            vec![
+                "import",
+                "--scene",
+                "bad/name",
+                "--key",
+                "a/b",
+                "--connect",
+                "tcp/127.0.0.1:9",
+            ],
+            "--scene",
+        ),
+        (
+            vec![
+                "import",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--connect",
+                "nonsense",
+            ],
+            "--connect",
+        ),
+        (vec!["import", "--key", "a/b"], "--scene"),
+    ] {
+        let out = Command::new(&relay)
+            .args(&args)
+            .output()
+            .expect("run ygg-relay");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
