@@ -76,7 +76,7 @@ const EXIT_TIMEOUT: u8 = 4;
 fn main() -> ExitCode {
     ygg_transport::init_iceoryx_logging();
     let cli = Cli::parse();
-    // Each layer costs about six descriptors; do not stop at a soft limit of 1024.
+    // A process may attach to many scenes (about 40 descriptors each); do not stop at a soft limit of 1024.
     let _ = ygg_transport::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::Watch(args) => watch(&args),

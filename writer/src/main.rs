@@ -119,7 +119,7 @@ struct ServeTest {
 fn main() -> ExitCode {
     ygg_transport::init_iceoryx_logging();
     let cli = Cli::parse();
-    // Each layer costs about six descriptors; do not stop at a soft limit of 1024.
+    // A process may attach to many scenes (about 40 descriptors each); do not stop at a soft limit of 1024.
     let _ = ygg_transport::limits::raise_open_file_limit();
     let result = match cli.command {
         Command::ServeTest(args) => serve_test(&args),
