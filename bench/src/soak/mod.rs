@@ -20,8 +20,10 @@
 //!   final writer's RSS grows by more than `--max-rss-growth` percent between its two
 //!   samples, the long-lived reader's private memory by more than
 //!   `--max-reader-anon-growth` percent between start and end, when open descriptors or
-//!   `/dev/shm` files do not return to their start values, or when anything is left in
-//!   `/dev/shm` after the last process exited.
+//!   `/dev/shm` files do not return to their start values (a reader's descriptors on the
+//!   writer's pool segments, whose number depends on how that writer's pool grew, within
+//!   the final writer's life; none may point to a removed segment), or when anything is
+//!   left in `/dev/shm` after the last process exited.
 //!
 //! Progress is a JSON line every `--progress-secs`, the verdict a final JSON summary
 //! line; the exit status is 0 only when every check held. Ctrl-C (or SIGTERM) stops
@@ -675,10 +677,28 @@ impl<'a> Soak<'a> {
                     f.writer.fds, end.writer.fds
                 ));
             }
-            if end.reader.fds != s.reader.fds {
+            // Data segments follow the writer's pool (see `Usage`): the reader's other
+            // descriptors across the whole run, its data segments within one writer's life.
+            let other = |u: &Usage| u.fds - u.pool_fds;
+            if other(&end.reader) != other(&s.reader) {
                 out.push(format!(
-                    "long-lived reader's open descriptors {} at the start, {} at the end",
-                    s.reader.fds, end.reader.fds
+                    "long-lived reader's open descriptors other than data segments {} at the \
+                     start, {} at the end",
+                    other(&s.reader),
+                    other(&end.reader)
+                ));
+            }
+            if end.reader.pool_fds != f.reader.pool_fds {
+                out.push(format!(
+                    "long-lived reader's data segments {} after the final writer's warm-up, {} \
+                     at the end",
+                    f.reader.pool_fds, end.reader.pool_fds
+                ));
+            }
+            if end.reader.removed_pool_fds > 0 {
+                out.push(format!(
+                    "long-lived reader keeps {} data segments of a writer that is gone",
+                    end.reader.removed_pool_fds
                 ));
             }
             for (when, n) in [
@@ -786,7 +806,7 @@ impl<'a> Soak<'a> {
         let (checked, matched) = self.answers();
         let bounds = json!({"writer_rss_growth_pct": self.args.max_rss_growth,
             "reader_anon_growth_pct": self.args.max_reader_anon_growth,
-            "fds_and_shm_files": "back to their start values"});
+            "fds_and_shm_files": "back to their start values (a reader's pool segments: within the final writer's life)"});
         let (mut writer_growth, mut reader_growth) = (None, None);
         if let (Some(s), Some(f), Some(e)) = (self.start, self.final_early, self.end) {
             let wg = growth_pct(f.writer.rss_kb, e.writer.rss_kb);

@@ -7,6 +7,12 @@ use ygg_testkit::{SHM_DIR, TestScene};
 
 /// Resident memory (from `/proc/<pid>/status`) and open file descriptors
 /// (`/proc/<pid>/fd`) of one process at one moment.
+///
+/// Descriptors on iceoryx2 data segments (`*.data` in `/dev/shm`) are counted apart: a reader
+/// maps each pool segment of the writer it follows, and a writer's pool has one to a few of
+/// them depending on when its segments grew (iceoryx2 grows a pool in power-of-two steps and
+/// keeps an older one while samples in it are held), so their number is compared within one
+/// writer's life only. A descriptor on a data segment that was removed is a leak at any time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Usage {
     /// `VmRSS`: all resident memory, kB.
@@ -17,6 +23,10 @@ pub struct Usage {
     pub shmem_kb: u64,
     /// Open file descriptors.
     pub fds: usize,
+    /// Of `fds`, those on iceoryx2 data segments (`*.data`).
+    pub pool_fds: usize,
+    /// Of `pool_fds`, those on a data segment that was removed (a gone writer's pool).
+    pub removed_pool_fds: usize,
 }
 
 impl Usage {
@@ -27,13 +37,17 @@ impl Usage {
     pub fn of(pid: u32) -> std::io::Result<Self> {
         let dir = Path::new("/proc").join(pid.to_string());
         let status = std::fs::read_to_string(dir.join("status"))?;
-        let fds = std::fs::read_dir(dir.join("fd"))?.count();
-        Ok(Self::parse(&status, fds))
+        // A descriptor closed between the listing and its readlink has no target: skipped.
+        let targets: Vec<String> = std::fs::read_dir(dir.join("fd"))?
+            .filter_map(|e| std::fs::read_link(e.ok()?.path()).ok())
+            .map(|t| t.to_string_lossy().into_owned())
+            .collect();
+        Ok(Self::parse(&status, &targets))
     }
 
-    /// The usage described by the text of a `/proc/<pid>/status` file and a count of
-    /// open descriptors; a field that is missing reads as 0.
-    fn parse(status: &str, fds: usize) -> Self {
+    /// The usage described by the text of a `/proc/<pid>/status` file and the targets of
+    /// the open descriptors; a field that is missing reads as 0.
+    fn parse(status: &str, fd_targets: &[String]) -> Self {
         let kb = |key: &str| {
             status
                 .lines()
@@ -41,11 +55,17 @@ impl Usage {
                 .and_then(|v| v.split_whitespace().next()?.parse().ok())
                 .unwrap_or(0)
         };
+        let removed = |t: &&String| t.ends_with(" (deleted)");
+        let pool = |t: &&String| {
+            t.starts_with(SHM_DIR) && t.trim_end_matches(" (deleted)").ends_with(".data")
+        };
         Self {
             rss_kb: kb("VmRSS"),
             anon_kb: kb("RssAnon"),
             shmem_kb: kb("RssShmem"),
-            fds,
+            fds: fd_targets.len(),
+            pool_fds: fd_targets.iter().filter(pool).count(),
+            removed_pool_fds: fd_targets.iter().filter(pool).filter(removed).count(),
         }
     }
 }
@@ -75,17 +95,28 @@ mod tests {
     fn status_fields_are_read_in_kilobytes_and_missing_ones_are_zero() {
         let status = "Name:\tygg-writer\nVmRSS:\t  123456 kB\nRssAnon:\t   100000 kB\n\
                       RssFile:\t    3456 kB\nRssShmem:\t   20000 kB\n";
-        let u = Usage::parse(status, 17);
+        let fds = [
+            "/dev/null",
+            "/dev/shm/p_1f_42__0.data",
+            "/dev/shm/p_1f_42__mgmt.data",
+            "/dev/shm/p_1f_41__4.data (deleted)",
+            "/dev/shm/p_9a_7.event_mgmt (deleted)",
+            "/tmp/x.data",
+        ]
+        .map(String::from);
+        let u = Usage::parse(status, &fds);
         assert_eq!(
             u,
             Usage {
                 rss_kb: 123_456,
                 anon_kb: 100_000,
                 shmem_kb: 20_000,
-                fds: 17
+                fds: 6,
+                pool_fds: 3,
+                removed_pool_fds: 1,
             }
         );
-        assert_eq!(Usage::parse("Name:\tx\n", 0), Usage::default());
+        assert_eq!(Usage::parse("Name:\tx\n", &[]), Usage::default());
     }
 
     #[test]

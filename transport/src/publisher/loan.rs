@@ -1,13 +1,23 @@
-//! Byte view of a loaned, not yet initialised sample.
+//! Byte view of a loaned, not yet initialised sample, and the pages a chunk gives back.
 //!
 //! The only unsafe code of the writer: it lets the store serialize straight into shared memory
-//! (DESIGN.md §8: exact-size serialization into a loaned sample avoids a copy).
+//! (DESIGN.md §8: exact-size serialization into a loaned sample avoids a copy), and releases the
+//! shared-memory pages of a loaned chunk that the new segment does not use.
+//!
+//! Why pages are released: every chunk of iceoryx2's pool has the size of the largest segment
+//! (rounded up to a power of two), and freed chunks are reused last-in first-out by whatever
+//! segment comes next. Without the release, every chunk that ever held a large segment keeps
+//! its tmpfs pages: a writer serving the office touched ~1 MB per chunk in use, and its
+//! resident shared memory grew by ~100 MB a minute under reader churn (`ygg-bench soak`). With
+//! it, the pool's pages in use are the sum of the segments held, rounded up to pages.
 #![expect(
     unsafe_code,
-    reason = "viewing a loaned shared-memory payload as bytes avoids zeroing or copying it"
+    reason = "viewing a loaned shared-memory payload as bytes avoids zeroing or copying it; \
+              releasing a loaned chunk's unused pages needs madvise on its address range"
 )]
 
 use core::mem::MaybeUninit;
+use std::collections::HashMap;
 
 use crate::protocol::{BLOCK_SIZE, Block128, Ipc, SegmentHeader};
 use iceoryx2::sample_mut::SampleMut;
@@ -19,8 +29,63 @@ pub type UninitSample = SampleMutUninit<Ipc, [MaybeUninit<Block128>], SegmentHea
 /// An initialised loaned sample of blocks, ready to send.
 pub type InitSample = SampleMut<Ipc, [Block128], SegmentHeader>;
 
+/// What one publisher wrote into its pool's chunks, so that it can give back the pages a chunk
+/// no longer needs when it is loaned again for a smaller segment.
+///
+/// Every loan asks for the largest slice loaned so far ([`ChunkPages::loan_blocks`]): iceoryx2
+/// sizes every chunk of the current pool for it, so the whole loaned range, and every page a
+/// previous segment of this publisher wrote into the chunk, belongs to the loan. Pages are only
+/// ever released inside the range of the sample the publisher holds on loan.
+#[derive(Debug)]
+pub struct ChunkPages {
+    /// Slice length (blocks) of every loan: the largest asked for so far.
+    loan_blocks: usize,
+    /// Per chunk (the address of its payload), the end (bytes from the payload start) of what
+    /// was written into it since its pages were last released.
+    written: HashMap<usize, usize>,
+    page: usize,
+}
+
+impl ChunkPages {
+    /// Starts with loans of `initial_blocks` (the pool's initial slice length).
+    pub fn new(initial_blocks: usize) -> Self {
+        Self {
+            loan_blocks: initial_blocks.max(1),
+            written: HashMap::new(),
+            page: rustix::param::page_size(),
+        }
+    }
+
+    /// The slice length to loan for a segment of `blocks` blocks: the largest loaned so far.
+    pub fn loan_blocks(&mut self, blocks: usize) -> usize {
+        self.loan_blocks = self.loan_blocks.max(blocks);
+        self.loan_blocks
+    }
+
+    /// Records that the chunk whose loaned payload starts at address `payload` (`total` bytes
+    /// on loan) now holds `len` bytes, and returns the whole pages past them that still hold
+    /// bytes of an earlier segment: `(start address, length)`, inside the loaned range.
+    fn stale_range(&mut self, payload: usize, total: usize, len: usize) -> Option<(usize, usize)> {
+        let page = self.page;
+        let dirty = self.written.get(&payload).copied().unwrap_or(0).min(total);
+        let start = (payload + len).next_multiple_of(page);
+        let end = (payload + dirty)
+            .next_multiple_of(page)
+            .min((payload + total) / page * page);
+        if end > start {
+            // The page `len` ends in keeps its older bytes past `len`.
+            self.written.insert(payload, start - payload);
+            Some((start, end - start))
+        } else {
+            self.written.insert(payload, dirty.max(len));
+            None
+        }
+    }
+}
+
 /// Lets `fill` write the first `len` bytes of the sample's payload, zeroes the rest of the
-/// last block, and returns the sample as initialised.
+/// block `len` ends in, releases the pages of the chunk that held bytes of an earlier, larger
+/// segment past that (they read as zeros again), and returns the sample as initialised.
 ///
 /// # Errors
 ///
@@ -28,23 +93,105 @@ pub type InitSample = SampleMut<Ipc, [Block128], SegmentHeader>;
 pub fn fill_sample<E>(
     mut sample: UninitSample,
     len: usize,
+    pages: &mut ChunkPages,
     fill: impl FnOnce(&mut [u8]) -> Result<(), E>,
 ) -> Result<InitSample, E> {
     let blocks = sample.payload_mut();
     let total = blocks.len() * BLOCK_SIZE;
     assert!(len <= total, "loaned sample is smaller than requested");
+    let payload = blocks.as_mut_ptr().cast::<u8>();
     // SAFETY: `blocks` is `blocks.len()` contiguous `MaybeUninit<Block128>`; a `Block128` is
     // `[u8; 128]` with no padding, so the region is exactly `total` bytes, valid for writes and
     // exclusively borrowed through `sample` for the lifetime of `bytes`. The memory is a
     // shared-memory mapping (mmap), never compiler-tracked uninitialised memory: every byte holds
     // either the kernel's zero fill or a byte written by an earlier sample, and every bit pattern
     // is a valid `u8`.
-    let bytes: &mut [u8] =
-        unsafe { core::slice::from_raw_parts_mut(blocks.as_mut_ptr().cast::<u8>(), total) };
-    let (payload, tail) = bytes.split_at_mut(len);
-    fill(payload)?;
-    tail.fill(0);
+    let bytes: &mut [u8] = unsafe { core::slice::from_raw_parts_mut(payload, total) };
+    let (content, tail) = bytes.split_at_mut(len);
+    fill(content)?;
+    let block_end = len.next_multiple_of(BLOCK_SIZE).min(total);
+    tail[..block_end - len].fill(0);
+    if let Some((start, range_len)) = pages.stale_range(payload.addr(), total, len) {
+        // SAFETY: `start..start + range_len` lies inside `payload..payload + total` (the range
+        // `stale_range` returns is clamped to `total` and starts after `len`), which is the
+        // payload of the sample this function holds on loan: no other process reads or writes
+        // it until the sample is sent, and no Rust reference into it is used after this call
+        // (`bytes` is not touched again). The range is page aligned and mapped shared and
+        // writable, so MADV_REMOVE frees its tmpfs pages, which then read as zeros. A failure
+        // (another kernel, another file system) only means the pages stay: it is ignored.
+        let _ = unsafe {
+            rustix::mm::madvise(
+                start as *mut core::ffi::c_void,
+                range_len,
+                rustix::mm::Advice::LinuxRemove,
+            )
+        };
+    }
     // SAFETY: every byte of every block was initialised above (see the SAFETY comment of
-    // `bytes`; the tail was zeroed explicitly) and any byte pattern is a valid `Block128`.
+    // `bytes`; the rest of the last written block was zeroed explicitly, released pages read as
+    // zeros) and any byte pattern is a valid `Block128`.
     Ok(unsafe { sample.assume_init() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ChunkPages;
+
+    #[test]
+    fn releases_only_pages_a_larger_segment_left_behind() {
+        let mut pages = ChunkPages::new(4);
+        let page = pages.page;
+        let base = 64 * page;
+        let total = 16 * page;
+        assert_eq!(pages.stale_range(base, total, 10 * page + 5), None);
+        // Smaller now: pages 3..=10 held bytes of the earlier segment.
+        assert_eq!(
+            pages.stale_range(base, total, 3 * page),
+            Some((base + 3 * page, 8 * page))
+        );
+        assert_eq!(
+            pages.stale_range(base, total, page),
+            Some((base + page, 2 * page))
+        );
+        // Growing or equal: nothing to release.
+        assert_eq!(pages.stale_range(base, total, 2 * page), None);
+        assert_eq!(pages.stale_range(base, total, 2 * page), None);
+        // Another chunk is tracked on its own.
+        assert_eq!(pages.stale_range(base + total, total, 1), None);
+    }
+
+    #[test]
+    fn keeps_partial_pages_at_both_ends() {
+        let mut pages = ChunkPages::new(4);
+        let page = pages.page;
+        // A payload that starts 256 bytes into a page, with 4 pages on loan.
+        let payload = 64 * page + 256;
+        let total = 4 * page;
+        assert_eq!(pages.stale_range(payload, total, 3 * page), None);
+        // The page holding byte 100 stays; the last page of the loan is not whole: stays.
+        assert_eq!(
+            pages.stale_range(payload, total, 100),
+            Some((65 * page, 3 * page))
+        );
+        // The page the payload starts in also holds the chunk's headers: never released.
+        assert_eq!(pages.stale_range(payload, total, 0), None);
+    }
+
+    #[test]
+    fn never_reaches_past_the_loaned_range() {
+        let mut pages = ChunkPages::new(4);
+        let page = pages.page;
+        let base = 8 * page;
+        assert_eq!(pages.stale_range(base, 8 * page, 8 * page), None);
+        // The same address loaned with a smaller slice (a new pool): clamped to it.
+        assert_eq!(pages.stale_range(base, 2 * page, 0), Some((base, 2 * page)));
+    }
+
+    #[test]
+    fn loans_the_largest_slice_asked_for() {
+        let mut pages = ChunkPages::new(4);
+        assert_eq!(pages.loan_blocks(2), 4);
+        assert_eq!(pages.loan_blocks(9), 9);
+        assert_eq!(pages.loan_blocks(3), 9);
+    }
 }

@@ -30,11 +30,14 @@ pub(crate) struct SegmentService {
     pub(crate) name: String,
     pub(crate) publisher: Publisher<Ipc, [Block128], SegmentHeader>,
     pub(crate) service: SegmentFactory,
+    /// What this writer wrote into the pool's chunks, to give back the pages a smaller
+    /// segment leaves unused ([`loan::ChunkPages`]).
+    pub(crate) pages: loan::ChunkPages,
 }
 
 /// Loans, fills and sends one segment after checking shared-memory space.
 pub(crate) fn send_segment<E>(
-    service: &SegmentService,
+    service: &mut SegmentService,
     shm_dir: &Path,
     header: SegmentHeader,
     len: usize,
@@ -50,13 +53,14 @@ where
     shm::ensure_free(shm_dir, payload_bytes as u64)?;
     let mut sample = service
         .publisher
-        .loan_slice_uninit(blocks)
+        .loan_slice_uninit(service.pages.loan_blocks(blocks))
         .map_err(|source| PublishError::Loan {
             service: service.name.clone(),
             source,
         })?;
     *sample.user_header_mut() = header;
-    let sample = loan::fill_sample(sample, len, fill).map_err(|e| PublishError::Fill(e.into()))?;
+    let sample = loan::fill_sample(sample, len, &mut service.pages, fill)
+        .map_err(|e| PublishError::Fill(e.into()))?;
     sample.send().map_err(|source| PublishError::Send {
         service: service.name.clone(),
         source,
@@ -106,6 +110,7 @@ pub(crate) fn open_segment_port(
         name: name.to_owned(),
         publisher,
         service,
+        pages: loan::ChunkPages::new(settings.initial_blocks),
     })
 }
 

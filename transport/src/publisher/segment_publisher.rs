@@ -252,7 +252,7 @@ impl Inner {
         let mut header = *sample.header();
         header.flags |= protocol::FLAG_CATCH_UP;
         let bytes = sample.bytes();
-        send_segment(&stream.port, shm_dir, header, bytes.len(), |buf| {
+        send_segment(&mut stream.port, shm_dir, header, bytes.len(), |buf| {
             buf.copy_from_slice(bytes);
             Ok::<_, std::convert::Infallible>(())
         })?;
@@ -381,7 +381,7 @@ impl SegmentPublisher {
         );
         let mut inner = lock(&self.inner);
         let stream = inner.stream.as_mut().ok_or(PublishError::Closed)?;
-        send_segment(&stream.port, &self.shm_dir, header, len, fill)?;
+        send_segment(&mut stream.port, &self.shm_dir, header, len, fill)?;
         stream.retained.receive(None);
         drop(inner);
         self.published.insert(layer_id, generation);
@@ -466,7 +466,7 @@ impl SegmentPublisher {
         );
         let mut inner = lock(&self.inner);
         let stream = inner.stream.as_mut().ok_or(PublishError::Closed)?;
-        send_segment(&stream.port, &self.shm_dir, header, total, |buf| {
+        send_segment(&mut stream.port, &self.shm_dir, header, total, |buf| {
             let (prefix, rest) = buf.split_at_mut(prefix_len);
             protocol::encode_manifest_prefix(entries, prefix);
             fill(rest)
