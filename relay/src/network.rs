@@ -6,6 +6,20 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+/// Reconnection settings a relay uses where its `--zenoh-config` file keeps Zenoh's defaults:
+/// retry every 100-250 ms (the default backs off to 4 s), keep retrying for good, and give
+/// up one attempt to open a link after 500 ms (the default: 10 s), so that an attempt whose
+/// TCP SYN went out while the link was down (retransmitted after 1 s, then 3 s) is replaced
+/// by a fresh one. A link on a LAN opens in a few milliseconds.
+const RECONNECT: [(&str, &str); 3] = [
+    (
+        "connect/retry",
+        "{period_init_ms: 100, period_max_ms: 250, period_increase_factor: 1.5}",
+    ),
+    ("connect/timeout_ms", "-1"),
+    ("transport/unicast/open_timeout", "500"),
+];
+
 /// How a relay joins the Zenoh network (shared by `export`, `import` and `put`).
 #[derive(Args, Debug, Clone)]
 pub struct NetworkArgs {
@@ -50,14 +64,10 @@ impl NetworkArgs {
             format!("[{}]", quoted.join(","))
         };
         let lease = self.lease_ms;
-        // Reconnect quickly after a link comes back (the default backs off to 4 s).
-        let retry = "{period_init_ms: 100, period_max_ms: 250, period_increase_factor: 1.5}";
         let settings = [
             ("mode", format!("{:?}", self.mode), "--mode"),
             ("connect/endpoints", json(&self.connect), "--connect"),
             ("listen/endpoints", json(&self.listen), "--listen"),
-            ("connect/retry", retry.to_owned(), "connect/retry"),
-            ("connect/timeout_ms", "-1".to_owned(), "connect/timeout_ms"),
             ("scouting/multicast/enabled", "false".to_owned(), "scouting"),
             ("scouting/gossip/enabled", "false".to_owned(), "scouting"),
             ("transport/link/tx/lease", lease.to_string(), "--lease-ms"),
@@ -70,6 +80,15 @@ impl NetworkArgs {
             config
                 .insert_json5(key, &value)
                 .map_err(|e| format!("{option}: zenoh refused {key} = {value}: {e}"))?;
+        }
+        // Tuned for healing a link within about a second, where the file keeps Zenoh's default.
+        let defaults = zenoh::Config::default();
+        for (key, value) in RECONNECT {
+            if config.get_json(key).ok() == defaults.get_json(key).ok() {
+                config
+                    .insert_json5(key, value)
+                    .map_err(|e| format!("zenoh refused {key} = {value}: {e}"))?;
+            }
         }
         Ok(config)
     }
@@ -118,5 +137,25 @@ mod tests {
                 .expect("key")
                 .contains("10.0.0.1")
         );
+        let open_timeout = config
+            .get_json("transport/unicast/open_timeout")
+            .expect("key");
+        assert_eq!(open_timeout, "500");
+    }
+
+    #[test]
+    fn a_config_file_keeps_its_own_reconnection_settings() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("zenoh.json5");
+        std::fs::write(&path, "{transport: {unicast: {open_timeout: 2500}}}").expect("write");
+        let mut with_file = args(&["tcp/10.0.0.1:7447"], &[]);
+        with_file.zenoh_config = Some(path);
+        let config = with_file.config().expect("valid config");
+        let open_timeout = config
+            .get_json("transport/unicast/open_timeout")
+            .expect("key");
+        assert_eq!(open_timeout, "2500");
+        let retry = config.get_json("connect/timeout_ms").expect("key");
+        assert_eq!(retry, "-1");
     }
 }

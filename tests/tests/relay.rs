@@ -208,6 +208,11 @@ struct Hosts {
 impl Hosts {
     fn new(tag: &str) -> Option<Self> {
         let link = Link::create()?;
+        // Built (or found) before a test starts its watchdog: a cold build of the relay and
+        // its Zenoh dependencies takes minutes on a fresh 2-core machine, and a watchdog that
+        // fired during it killed the test's writer (seen in a clean-clone CI run).
+        relay_binary();
+        binary("ygg-writer");
         let robot = TestScene::new(tag);
         let remote = TestScene::new(tag);
         let key = format!("test/{}", robot.name);
