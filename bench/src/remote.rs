@@ -37,7 +37,7 @@ use ygg_reader::{SceneReader, SceneReceiveError};
 use ygg_store::query::children;
 use ygg_store::{NodeId, Point, SceneView};
 use ygg_testkit::stats::median_p99;
-use ygg_testkit::{Input, Proc};
+use ygg_testkit::{Input, Proc, VethLink};
 use ygg_transport::{ReceiveError, WriterStatus};
 use ygg_writer::SceneWriter;
 
@@ -113,113 +113,6 @@ while True:
     print(f"received t_ns={time.monotonic_ns()} nodes={r._graph.num_nodes()}", flush=True)
 "#;
 
-/// Two network namespaces joined by a veth pair; deleted on drop (also on error).
-struct Link {
-    ns: [String; 2],
-    veth: [String; 2],
-    addr: [String; 2],
-}
-
-impl Link {
-    fn create() -> Result<Self, String> {
-        if !rustix::process::geteuid().is_root() {
-            return Err("ygg-bench remote needs root (it creates network namespaces)".into());
-        }
-        let pid = std::process::id();
-        let net = format!("10.99.{}", (pid / 64) % 256);
-        let host = (pid % 64) * 4;
-        let link = Self {
-            ns: [format!("ybA{pid}"), format!("ybB{pid}")],
-            veth: [format!("yba{pid}"), format!("ybb{pid}")],
-            addr: [format!("{net}.{}", host + 1), format!("{net}.{}", host + 2)],
-        };
-        ip(&["netns", "add", &link.ns[0]])?;
-        // From here on, drop deletes what exists.
-        ip(&["netns", "add", &link.ns[1]])?;
-        ip(&[
-            "link",
-            "add",
-            &link.veth[0],
-            "type",
-            "veth",
-            "peer",
-            "name",
-            &link.veth[1],
-        ])?;
-        for side in 0..2 {
-            let (ns, veth) = (&link.ns[side], &link.veth[side]);
-            ip(&["link", "set", veth, "netns", ns])?;
-            ip(&[
-                "-n",
-                ns,
-                "addr",
-                "add",
-                &format!("{}/30", link.addr[side]),
-                "dev",
-                veth,
-            ])?;
-            ip(&["-n", ns, "link", "set", veth, "up"])?;
-            ip(&["-n", ns, "link", "set", "lo", "up"])?;
-        }
-        Ok(link)
-    }
-
-    /// `program args` inside namespace `side` (0: robot, 1: remote).
-    fn command(&self, side: usize, program: &Path, args: &[&str]) -> Command {
-        let mut command = Command::new("ip");
-        command
-            .args(["netns", "exec", &self.ns[side]])
-            .arg(program)
-            .args(args);
-        command
-    }
-
-    fn set_up(&self, up: bool) -> Result<(), String> {
-        let state = if up { "up" } else { "down" };
-        ip(&["-n", &self.ns[0], "link", "set", &self.veth[0], state])
-    }
-
-    /// rx + tx bytes of the robot's veth end, read through `/proc/<pid>/net/dev` of a
-    /// process (`pid`) in the robot's namespace.
-    fn wire_bytes(&self, pid: u32) -> Result<u64, String> {
-        let dev = std::fs::read_to_string(format!("/proc/{pid}/net/dev"))
-            .map_err(|e| format!("/proc/{pid}/net/dev: {e}"))?;
-        let line = dev
-            .lines()
-            .find_map(|l| l.trim_start().strip_prefix(&format!("{}:", self.veth[0])))
-            .ok_or_else(|| format!("{} not in /proc/{pid}/net/dev", self.veth[0]))?;
-        let f: Vec<u64> = line
-            .split_whitespace()
-            .filter_map(|w| w.parse().ok())
-            .collect();
-        Ok(f.first().copied().unwrap_or(0) + f.get(8).copied().unwrap_or(0))
-    }
-}
-
-impl Drop for Link {
-    fn drop(&mut self) {
-        for ns in &self.ns {
-            let _ = ip(&["netns", "del", ns]);
-        }
-    }
-}
-
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip")
-        .args(args)
-        .output()
-        .map_err(|e| format!("ip {}: {e} (is iproute2 installed?)", args.join(" ")))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
-    }
-}
-
 /// The `ygg-relay` binary beside the testkit's binaries; built once for this profile
 /// when run by cargo (`cargo run -p ygg-bench -- remote`).
 fn relay_binary() -> Result<PathBuf, String> {
@@ -285,7 +178,7 @@ impl Row {
 
 /// The robot writer, the relay pair and the remote reader.
 struct Relay<'a> {
-    link: &'a Link,
+    link: &'a VethLink,
     writer: SceneWriter,
     reader: SceneReader,
     exporter: Proc,
@@ -386,7 +279,8 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         (200, 7, 20.0)
     };
     let relay_bin = relay_binary()?;
-    let link = Link::create()?;
+    let link = VethLink::create("yb")
+        .map_err(|e| format!("ygg-bench remote cannot create its two hosts: {e}"))?;
     let robot = crate::demo::run_scene("remote-robot");
     let remote = crate::demo::run_scene("remote-host");
     let key = format!("bench/{}", robot.name);
@@ -410,7 +304,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         .iceoryx_prefix(&robot.prefix)
         .create(graph)?;
 
-    let endpoint = format!("tcp/{}:{PORT}", link.addr[0]);
+    let endpoint = link.endpoint(0, PORT);
     let mut exporter_cmd = link.command(
         0,
         &relay_bin,
@@ -540,7 +434,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     relay.stop();
 
     // spark_dsg's full-graph stream over the same link, for the same number of edits.
-    let zmq_endpoint = format!("tcp://{}:{ZMQ_PORT}", link.addr[0]);
+    let zmq_endpoint = format!("tcp://{}:{ZMQ_PORT}", link.address(0));
     let python = Path::new(&args.python);
     let mut sender_cmd = link.command(0, python, &["-c", SPARK_SENDER]);
     sender_cmd.arg(&office_file).arg(&zmq_endpoint);

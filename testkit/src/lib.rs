@@ -12,15 +12,19 @@
 //! * [`stats`] is the one median / p99 (nearest rank) everything reports.
 //! * [`fingerprint`] gives canonical forms of archived segments, to compare incremental
 //!   builds with fresh ones.
+//! * [`VethLink`] makes two hosts on one machine (network namespaces joined by a veth
+//!   pair) for what crosses a network.
 
 mod binary;
 pub mod fingerprint;
 mod proc;
 mod scene;
 pub mod stats;
+mod veth;
 mod watchdog;
 
 pub use binary::{ENV_BIN_DIR, binary, example, run, text};
 pub use proc::{DROP_GRACE, ENV_PARENT_PID, Input, LineError, Proc, die_with_parent, field};
 pub use scene::{ICEORYX2_DIR, PREFIX_TAG, SHM_DIR, TestScene, remove_stale};
+pub use veth::VethLink;
 pub use watchdog::Watchdog;

@@ -9,14 +9,14 @@
 
 use std::collections::BTreeMap;
 use std::hash::{DefaultHasher, Hash, Hasher};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
 use rustix::process::Signal;
-use ygg_testkit::{Proc, TestScene, Watchdog, binary, field};
+use ygg_testkit::{Proc, TestScene, VethLink, Watchdog, binary, field};
 use ygg_transport::{ReceiveError, Snapshot, SubscriberBuilder};
 
 /// Generous bound for one step (debug builds on a busy 2-core machine).
@@ -28,135 +28,36 @@ const PORT: u16 = 7447;
 /// Zenoh port the importer listens on (for peers that put on its key).
 const IMPORT_PORT: u16 = 7448;
 
-/// Why the tests cannot create namespaces here, if they cannot.
-fn unsupported() -> Option<String> {
-    if !rustix::process::geteuid().is_root() {
-        return Some("not root: network namespaces need CAP_SYS_ADMIN".into());
-    }
-    match Command::new("ip").arg("-V").output() {
-        Ok(out) if out.status.success() => None,
-        _ => Some("`ip` (iproute2) is missing".into()),
-    }
-}
-
-/// Two network namespaces joined by a veth pair with a private /30; deleted on drop.
-struct Link {
-    ns: [String; 2],
-    veth: [String; 2],
-    addr: [String; 2],
-}
+/// The test's two hosts (0: the robot, 1: the remote host).
+struct Link(VethLink);
 
 impl Link {
-    /// Creates the pair, or `None` (after printing why) where that is impossible.
+    /// Creates them, or `None` (after printing why) where that is impossible.
     fn create() -> Option<Self> {
-        static COUNTER: AtomicU32 = AtomicU32::new(0);
-        if let Some(why) = unsupported() {
-            eprintln!("skipping the relay test: {why}");
-            return None;
-        }
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let pid = std::process::id();
-        // A /30 per process and test: 10.<100+n>.<pid / 64 % 256>.<pid % 64 * 4>.
-        let net = format!("10.{}.{}", 100 + n % 100, (pid / 64) % 256);
-        let host = (pid % 64) * 4;
-        let link = Self {
-            ns: [format!("yrA{pid}x{n}"), format!("yrB{pid}x{n}")],
-            veth: [format!("yra{pid}x{n}"), format!("yrb{pid}x{n}")],
-            addr: [format!("{net}.{}", host + 1), format!("{net}.{}", host + 2)],
-        };
-        let steps: Vec<Vec<String>> = vec![
-            vec!["netns".into(), "add".into(), link.ns[0].clone()],
-            vec!["netns".into(), "add".into(), link.ns[1].clone()],
-            vec![
-                "link".into(),
-                "add".into(),
-                link.veth[0].clone(),
-                "type".into(),
-                "veth".into(),
-                "peer".into(),
-                "name".into(),
-                link.veth[1].clone(),
-            ],
-        ];
-        for step in &steps {
-            if let Err(e) = ip(step) {
-                eprintln!("skipping the relay test: cannot set up namespaces: {e}");
-                return None;
+        match VethLink::create("yr") {
+            Ok(link) => Some(Self(link)),
+            Err(why) => {
+                eprintln!("skipping the relay test: {why}");
+                None
             }
         }
-        for side in 0..2 {
-            let (ns, veth) = (&link.ns[side], &link.veth[side]);
-            for step in [
-                vec!["link", "set", veth, "netns", ns],
-                vec![
-                    "-n",
-                    ns,
-                    "addr",
-                    "add",
-                    &format!("{}/30", link.addr[side]),
-                    "dev",
-                    veth,
-                ],
-                vec!["-n", ns, "link", "set", veth, "up"],
-                vec!["-n", ns, "link", "set", "lo", "up"],
-            ] {
-                ip(&step).unwrap_or_else(|e| panic!("{e}"));
-            }
-        }
-        Some(link)
     }
 
-    /// `program args` run inside namespace `side` (0: robot, 1: remote host), with
-    /// `scene`'s iceoryx2 prefix.
-    fn command(&self, side: usize, scene: &TestScene, program: &PathBuf, args: &[&str]) -> Command {
-        let mut command = Command::new("ip");
-        command
-            .args(["netns", "exec", &self.ns[side]])
-            .arg(program)
-            .args(args);
+    /// `program args` run inside host `side`, with `scene`'s iceoryx2 prefix.
+    fn command(&self, side: usize, scene: &TestScene, program: &Path, args: &[&str]) -> Command {
+        let mut command = self.0.command(side, program, args);
         scene.configure(&mut command);
         command
     }
 
     /// `tcp/<address of side>:<port>`.
     fn endpoint(&self, side: usize, port: u16) -> String {
-        format!("tcp/{}:{port}", self.addr[side])
+        self.0.endpoint(side, port)
     }
 
     /// Takes the robot's end of the link down or up.
     fn set_up(&self, up: bool) {
-        let state = if up { "up" } else { "down" };
-        ip(&["-n", &self.ns[0], "link", "set", &self.veth[0], state])
-            .unwrap_or_else(|e| panic!("{e}"));
-    }
-}
-
-impl Drop for Link {
-    fn drop(&mut self) {
-        // Deleting a namespace deletes the veth end inside it, and so the pair.
-        for ns in &self.ns {
-            if let Err(e) = ip(&["netns", "del", ns]) {
-                eprintln!("warning: {e}");
-            }
-        }
-    }
-}
-
-/// Runs `ip args`.
-fn ip<S: AsRef<str>>(args: &[S]) -> Result<(), String> {
-    let args: Vec<&str> = args.iter().map(AsRef::as_ref).collect();
-    let out = Command::new("ip")
-        .args(&args)
-        .output()
-        .map_err(|e| format!("ip {}: {e}", args.join(" ")))?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(format!(
-            "ip {}: {}",
-            args.join(" "),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ))
+        self.0.set_up(up).unwrap_or_else(|e| panic!("{e}"));
     }
 }
 
