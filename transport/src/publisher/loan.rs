@@ -13,7 +13,8 @@
 #![expect(
     unsafe_code,
     reason = "viewing a loaned shared-memory payload as bytes avoids zeroing or copying it; \
-              releasing a loaned chunk's unused pages needs madvise on its address range"
+              releasing a loaned chunk's unused pages needs madvise on its address range and the page size \
+              from sysconf"
 )]
 
 use core::mem::MaybeUninit;
@@ -69,7 +70,7 @@ pub struct ChunkPages {
 impl ChunkPages {
     /// Starts with loans of `initial_blocks` (the pool's initial slice length).
     pub fn new(initial_blocks: usize) -> Self {
-        Self {
+        let mut pages = Self {
             loan_blocks: initial_blocks.max(1),
             written: HashMap::new(),
             resident: 0,
@@ -77,8 +78,14 @@ impl ChunkPages {
             newest_total: 0,
             floor: RESIDENT_FLOOR,
             factor: RESIDENT_FACTOR,
-            page: rustix::param::page_size(),
+            page: 4096,
+        };
+        match page_size() {
+            Some(page) => pages.page = page,
+            // Without the page size nothing can be released safely: never release.
+            None => pages.floor = usize::MAX,
         }
+        pages
     }
 
     /// The slice length to loan for a segment of `blocks` blocks: the largest loaned so far.
@@ -118,6 +125,14 @@ impl ChunkPages {
         self.resident = self.resident + written - old_written;
         release
     }
+}
+
+/// The size of a memory page, from `sysconf` (rustix's `page_size` reads the auxiliary
+/// vector in a way that crashes under Valgrind).
+fn page_size() -> Option<usize> {
+    // SAFETY: sysconf(3) takes no pointers and only reads a constant of the system.
+    let size = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    usize::try_from(size).ok().filter(|&s| s.is_power_of_two())
 }
 
 /// Lets `fill` write the first `len` bytes of the sample's payload, zeroes the rest of the
