@@ -92,9 +92,9 @@ pub const fn stream_buffer_size(max_segments: usize) -> usize {
 /// `max_segments` segments: the current snapshot's, newer ones waiting for their manifest
 /// (or a burst being received), and a few manifests and samples of older snapshots the
 /// application still holds. Costs address space and a byte per sample and possible
-/// reallocation in each connection: iceoryx2 reuses freed chunks last-in first-out and the
-/// writer gives back the pages a reused chunk no longer needs (`publisher::loan`), so
-/// shared-memory pages are used only for samples really in use.
+/// reallocation in each connection: iceoryx2 reuses freed chunks last-in first-out, and the
+/// writer gives back the pages a reused chunk no longer needs once the pool holds more than
+/// about four snapshots (`publisher::loan`), so unused chunks cost address space, not memory.
 pub const fn stream_max_borrowed(max_segments: usize) -> usize {
     2 * max_segments + 16
 }

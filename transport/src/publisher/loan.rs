@@ -9,12 +9,13 @@
 //! segment comes next. Without the release, every chunk that ever held a large segment keeps
 //! its tmpfs pages: a writer serving the office touched ~1 MB per chunk in use, and its
 //! resident shared memory grew by ~100 MB a minute under reader churn (`ygg-bench soak`). With
-//! it, the pool's pages in use are the sum of the segments held, rounded up to pages.
+//! it, the pages written into the pool stay near a budget of four times the newest segments
+//! (at least 16 MiB; [`ChunkPages`]).
 #![expect(
     unsafe_code,
     reason = "viewing a loaned shared-memory payload as bytes avoids zeroing or copying it; \
-              releasing a loaned chunk's unused pages needs madvise on its address range and the page size \
-              from sysconf"
+              releasing a loaned chunk's unused pages needs madvise on its address range \
+              and the page size from sysconf"
 )]
 
 use core::mem::MaybeUninit;
