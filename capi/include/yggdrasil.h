@@ -152,6 +152,10 @@ typedef struct ygg_writer_options {
   // Initial capacity of a layer's shared-memory segment in bytes; grown in
   // power-of-two steps (default 64 KiB).
   size_t initial_segment_bytes;
+  // Most layers the scene may have while this writer publishes it (default: a quarter
+  // more than the graph's layers, at least 64 more); a publish of more fails. Set it for a scene that
+  // starts small and grows; a lower bound makes readers attach faster.
+  size_t max_layers;
 } ygg_writer_options;
 
 // What one `ygg_writer_publish` sent.

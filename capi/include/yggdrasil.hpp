@@ -428,7 +428,7 @@ inline Snapshot SceneGraph::snapshot() const {
 class Writer {
 public:
   /// Creates the writer of `scene` and moves `graph` into it (`graph` is left empty).
-  Writer(const std::string& scene, SceneGraph&& graph, ygg_writer_options options = {0, 0}) {
+  Writer(const std::string& scene, SceneGraph&& graph, ygg_writer_options options = {}) {
     check(ygg_writer_create(scene.c_str(), graph.handle_, &options, &handle_));
     graph.handle_ = nullptr;  // the C call destroyed the graph handle
     ygg_graph* live = nullptr;

@@ -71,6 +71,14 @@ impl YggGraph {
         }
     }
 
+    /// Layers of the graph the handle owns (`None` for a writer's graph).
+    pub(crate) fn owned_layer_count(&self) -> Option<usize> {
+        match &self.slot {
+            GraphSlot::Owned(g) => Some(ygg_store::SceneView::layers(g).count()),
+            GraphSlot::OfWriter(_) => None,
+        }
+    }
+
     /// Whether the handle owns its graph (rather than borrowing a writer's).
     pub(crate) fn is_owned(&self) -> bool {
         matches!(self.slot, GraphSlot::Owned(_))

@@ -38,6 +38,10 @@ pub struct YggWriterOptions {
     /// Initial capacity of a layer's shared-memory segment in bytes; grown in
     /// power-of-two steps (default 64 KiB).
     pub initial_segment_bytes: usize,
+    /// Most layers the scene may have while this writer publishes it (default: a quarter
+    /// more than the graph's layers, at least 64 more); a publish of more fails. Set it for a scene that
+    /// starts small and grows; a lower bound makes readers attach faster.
+    pub max_layers: usize,
 }
 
 /// What one `ygg_writer_publish` sent.
@@ -90,10 +94,14 @@ pub unsafe extern "C" fn ygg_writer_create(
         // SAFETY: `options` is null or points to a readable `YggWriterOptions`.
         let options = unsafe { options.as_ref() }.copied().unwrap_or_default();
         let source = handle::resolve_mut(graph, "graph")?;
-        if !source.is_owned() {
+        let Some(layers) = source.owned_layer_count() else {
             return Err(FfiError::invalid("the graph already belongs to a writer"));
-        }
-        let mut builder = SceneWriter::builder(scene);
+        };
+        let max_layers = match options.max_layers {
+            0 => ygg_writer::default_max_layers(layers),
+            n => n,
+        };
+        let mut builder = SceneWriter::builder(scene).max_layers(max_layers);
         if options.max_readers > 0 {
             builder = builder.max_readers(options.max_readers);
         }

@@ -27,15 +27,20 @@ pub struct Writer {
 impl Writer {
     /// Creates the scene `scene_name` and publishes `graph` as its first snapshot.
     ///
+    /// `max_layers` bounds the scene's layers while this writer publishes it (default:
+    /// a quarter more than the graph's and at least 64 more; set it for a graph that
+    /// starts small and grows).
+    ///
     /// Raises `TransportError` (the scene is already served, a bad name, ...) and
     /// `MutationError` if `graph` is already published by another writer.
     #[new]
-    #[pyo3(signature = (scene_name, graph, max_readers = 8))]
+    #[pyo3(signature = (scene_name, graph, max_readers = 8, max_layers = None))]
     fn py_new(
         py: Python<'_>,
         scene_name: &str,
         graph: Py<PySceneGraph>,
         max_readers: usize,
+        max_layers: Option<usize>,
     ) -> PyResult<Self> {
         let owned = {
             let mut home = graph.get().home();
@@ -51,9 +56,12 @@ impl Writer {
         // The writer takes a clone: a failed create returns no graph, and the Python
         // graph must stay as it was when construction fails.
         let created = py.detach(|| {
-            SceneWriter::builder(scene_name)
-                .max_readers(max_readers)
-                .create(owned.clone())
+            let builder = SceneWriter::builder(scene_name).max_readers(max_readers);
+            match max_layers {
+                Some(n) => builder.max_layers(n),
+                None => builder,
+            }
+            .create(owned.clone())
         });
         let mut writer = match created {
             Ok(w) => w,

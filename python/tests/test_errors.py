@@ -125,3 +125,19 @@ def test_no_writer_raises_transport_error(scene_name):
         yggdrasil.Reader(scene_name)
     with pytest.raises(yggdrasil.TransportError):
         yggdrasil.Writer("bad name with spaces!", yggdrasil.SceneGraph())
+
+
+def test_a_graph_past_the_writers_layer_bound_raises_and_keeps_the_last_snapshot(scene_name):
+    g = yggdrasil.SceneGraph()
+    g.add_layer("rooms")
+    with yggdrasil.Writer(scene_name, g, max_layers=1) as writer, yggdrasil.Reader(
+        scene_name
+    ) as reader:
+        assert reader.wait_next(5.0).layers == ["rooms"]
+        g.add_layer("objects")
+        with pytest.raises(yggdrasil.TransportError, match="max_layers"):
+            writer.publish()
+        assert reader.latest().layers == ["rooms"]
+        g.remove_layer("objects")
+        writer.publish()
+        assert reader.latest().layers == ["rooms"]

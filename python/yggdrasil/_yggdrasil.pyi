@@ -270,7 +270,16 @@ class Reader:
 class Writer:
     """Publishes a ``SceneGraph``; its later mutations go to the writer."""
 
-    def __init__(self, scene_name: str, graph: SceneGraph, max_readers: int = 8) -> None: ...
+    def __init__(
+        self,
+        scene_name: str,
+        graph: SceneGraph,
+        max_readers: int = 8,
+        max_layers: Optional[int] = None,
+    ) -> None:
+        """Creates the scene and publishes ``graph``; ``max_layers`` bounds its layers
+        (default a quarter more than the graph's, at least 64 more); raises
+        ``TransportError``."""
     def publish(self) -> Dict[str, int]:
         """Sends the changed layers and a manifest."""
     @property

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use ygg_store::snapshot::SegmentBytes;
-use ygg_transport::protocol::DEFAULT_MAX_READERS;
+use ygg_transport::protocol::{DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS};
 use ygg_transport::{PublisherBuilder, SegmentPublisher};
 use zenoh::Wait as _;
 use zenoh::bytes::ZBytes;
@@ -32,6 +32,10 @@ pub struct ImportArgs {
     /// Readers the local scene supports at once.
     #[arg(long, default_value_t = DEFAULT_MAX_READERS)]
     pub max_readers: usize,
+    /// Most layers the remote scene may grow to (the segment stream is sized for it; a
+    /// lower bound makes local readers attach faster).
+    #[arg(long, default_value_t = DEFAULT_MAX_SEGMENTS)]
+    pub max_layers: usize,
     /// How Zenoh connects.
     #[command(flatten)]
     pub network: NetworkArgs,
@@ -256,6 +260,7 @@ impl Importer<'_> {
             None => {
                 let publisher = PublisherBuilder::new(&self.args.scene)
                     .max_readers(self.args.max_readers)
+                    .max_segments(self.args.max_layers)
                     .create()
                     .map_err(|e| format!("cannot publish scene {:?}: {e}", self.args.scene))?;
                 self.local.insert(Local {

@@ -1,5 +1,6 @@
 //! [`TestScene`]: a unique scene name and iceoryx2 prefix per test or run, and the scan
-//! of `/dev/shm` and `/tmp/iceoryx2` for the files of a prefix.
+//! of `/dev/shm` (iceoryx2's shared memory and, below [`ICEORYX2_DIR`], its node and service
+//! files) for the files of a prefix.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -10,8 +11,9 @@ use ygg_transport::protocol::ENV_IOX2_PREFIX;
 
 use crate::{Proc, Watchdog, binary};
 
-/// Where iceoryx2 keeps node and service files (besides `/dev/shm`).
-pub const ICEORYX2_DIR: &str = "/tmp/iceoryx2";
+/// Where iceoryx2 keeps node and service files for Yggdrasil: inside [`SHM_DIR`], so the
+/// scans of [`SHM_DIR`] (recursive) cover it.
+pub const ICEORYX2_DIR: &str = ygg_transport::protocol::ICEORYX2_ROOT;
 
 /// The POSIX shared-memory directory.
 pub const SHM_DIR: &str = "/dev/shm";
@@ -74,12 +76,15 @@ impl TestScene {
         Proc::spawn(self.command("ygg-reader", &all), "reader", watchdog)
     }
 
-    /// Every file of this scene's prefix in `/dev/shm` and under `/tmp/iceoryx2`.
+    /// Every file of this scene's prefix below `/dev/shm` (iceoryx2's node and service
+    /// files included, [`ICEORYX2_DIR`]).
     pub fn files(&self) -> Vec<PathBuf> {
         let mut found = Vec::new();
-        for dir in [SHM_DIR, ICEORYX2_DIR] {
-            collect(Path::new(dir), &|n| n.starts_with(&self.prefix), &mut found);
-        }
+        collect(
+            Path::new(SHM_DIR),
+            &|n| n.starts_with(&self.prefix),
+            &mut found,
+        );
         found
     }
 
@@ -158,8 +163,8 @@ fn collect(dir: &Path, keep: &dyn Fn(&str) -> bool, found: &mut Vec<PathBuf>) {
     }
 }
 
-/// Removes the files of [`TestScene`] prefixes (in `/dev/shm`, under `/tmp/iceoryx2`,
-/// and directly in the temp dir: sockets named after a prefix) whose process no longer
+/// Removes the files of [`TestScene`] prefixes (below `/dev/shm`, iceoryx2's node files
+/// included, and directly in the temp dir: sockets named after a prefix) whose process no longer
 /// exists: what runs killed with SIGKILL could not clean up. Returns how many files were
 /// removed.
 pub fn remove_stale() -> usize {
@@ -174,7 +179,6 @@ pub fn remove_stale() -> usize {
     };
     let mut found = Vec::new();
     collect(Path::new(SHM_DIR), &dead_run, &mut found);
-    collect(Path::new(ICEORYX2_DIR), &dead_run, &mut found);
     if let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) {
         for e in entries.flatten() {
             if dead_run(&e.file_name().to_string_lossy()) {

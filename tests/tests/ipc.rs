@@ -327,6 +327,59 @@ fn a_second_writer_on_the_same_scene_fails_clearly() {
 }
 
 #[test]
+fn a_restarted_writer_asking_for_more_segments_keeps_the_stream_readers_hold() {
+    let scene = TestScene::new("bound");
+    let _dog = Watchdog::new(WATCHDOG);
+    let publish_cut = |writer: &mut ygg_transport::SegmentPublisher, generation: u64, ids| {
+        let entries: Vec<ManifestEntry> = (1..=ids)
+            .map(|layer_id| ManifestEntry {
+                layer_id,
+                generation,
+            })
+            .collect();
+        for entry in &entries {
+            writer.publish_layer(entry.layer_id, generation, 64, |b| {
+                test_pattern::write(b, entry.layer_id, generation)
+            })?;
+        }
+        writer.publish_manifest(generation, &entries, 0, |_| {})
+    };
+    let mut first = publisher(&scene).max_segments(8).create().expect("writer");
+    assert_eq!(first.max_segments(), 8);
+    publish_cut(&mut first, 1, 8).expect("8 segments fit");
+    let mut reader = open_reader(&scene);
+    let held = next_snapshot(&mut reader);
+    assert_eq!(held.layer_count(), 8);
+    drop(first);
+
+    // The reader keeps the stream alive: a new writer asking for 64 gets the stream as it
+    // is, and says so, instead of failing to start.
+    let mut second = publisher(&scene)
+        .max_segments(64)
+        .create()
+        .expect("restart");
+    assert_eq!(second.max_segments(), 8);
+    let err = publish_cut(&mut second, 2, 9).expect_err("9 segments exceed the stream");
+    assert!(
+        matches!(err, PublishError::TooManyLayers { count: 9, max: 8 }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("max_layers"), "{err}");
+    publish_cut(&mut second, 3, 8).expect("8 segments still fit");
+    let fresh = loop {
+        let snapshot = next_snapshot(&mut reader);
+        if snapshot.session() == second.session() {
+            break snapshot;
+        }
+    };
+    assert_eq!(fresh.layer_count(), 8);
+    assert_synthetic(&fresh);
+    assert_synthetic(&held);
+    drop((held, fresh, reader, second));
+    scene.assert_no_leftovers(STEP);
+}
+
+#[test]
 fn sigint_and_sigterm_exit_cleanly_and_remove_shared_memory() {
     for signal in [Signal::INT, Signal::TERM] {
         let scene = TestScene::new("signal");

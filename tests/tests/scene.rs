@@ -221,3 +221,42 @@ fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
     assert!(out.contains("nothing left in /dev/shm"), "{out}");
     scene.assert_no_leftovers(Duration::from_secs(5));
 }
+
+#[test]
+fn a_scene_growing_past_its_writers_layer_bound_is_refused_and_kept() {
+    let scene = TestScene::new("bound");
+    let _watchdog = Watchdog::new(WATCHDOG);
+    let mut graph = ygg_store::SceneGraph::new();
+    graph.add_layer("rooms").expect("layer");
+    let mut writer = ygg_writer::SceneWriter::builder(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .create(graph)
+        .expect("writer");
+    assert_eq!(writer.max_layers(), ygg_writer::default_max_layers(1));
+    writer.publish().expect("publish");
+    let mut reader = attach(&scene);
+    let first = snapshot_after(&mut reader, 1);
+
+    for i in 1..=writer.max_layers() {
+        writer
+            .graph_mut()
+            .add_layer(&format!("room{i}"))
+            .expect("layer");
+    }
+    let err = writer.publish().expect_err("one layer past the bound");
+    assert!(err.to_string().contains("max_layers"), "{err}");
+    // Nothing is lost: the graph keeps its layers, the reader its snapshot, and a publish
+    // within the bound goes through.
+    assert_eq!(writer.graph().layers().count(), writer.max_layers() + 1);
+    assert_eq!(first.view().layers().count(), 1);
+    let last = writer
+        .graph()
+        .layer_by_name(&format!("room{}", writer.max_layers()))
+        .expect("the last room");
+    writer.graph_mut().remove_layer(last).expect("remove");
+    let report = writer.publish().expect("publish within the bound");
+    let fresh = snapshot_after(&mut reader, report.generation);
+    assert_eq!(fresh.view().layers().count(), writer.max_layers());
+    drop((first, fresh, reader, writer));
+    scene.assert_no_leftovers(STEP);
+}

@@ -35,7 +35,7 @@ use core::fmt;
 use core::time::Duration;
 
 use iceoryx2::config::Config;
-use iceoryx2::prelude::{EventId, FileName, SemanticString, ZeroCopySend};
+use iceoryx2::prelude::{EventId, FileName, Path, SemanticString, ZeroCopySend};
 
 /// The iceoryx2 service flavour used by writer and reader.
 ///
@@ -99,6 +99,18 @@ pub const fn stream_max_borrowed(max_segments: usize) -> usize {
     2 * max_segments + 16
 }
 
+/// Segments per snapshot a stream created with this subscriber buffer size and borrow limit
+/// supports: the inverse of [`stream_buffer_size`] and [`stream_max_borrowed`].
+pub const fn stream_segments_supported(buffer_size: usize, max_borrowed: usize) -> usize {
+    let by_buffer = buffer_size.saturating_sub(2);
+    let by_borrowed = max_borrowed.saturating_sub(16) / 2;
+    if by_buffer < by_borrowed {
+        by_buffer
+    } else {
+        by_borrowed
+    }
+}
+
 /// [`SegmentHeader::flags`] bit: the segment is a catch-up copy of the current snapshot.
 pub const FLAG_CATCH_UP: u32 = 1;
 
@@ -133,6 +145,13 @@ pub const ENV_IOX2_PREFIX: &str = "YGG_IOX2_PREFIX";
 
 /// Default path of the POSIX shared-memory file system that iceoryx2 allocates from.
 pub const DEFAULT_SHM_DIR: &str = "/dev/shm";
+
+/// Where iceoryx2 keeps its node and service files for Yggdrasil (its own default is
+/// `/tmp/iceoryx2/`): on the shared-memory tmpfs, because iceoryx2 fsyncs every node and
+/// port file it writes, 7 fsyncs per attaching reader that cost 5-8 ms of a ~20 ms attach on
+/// a disk-backed `/tmp`. Every Yggdrasil process uses it ([`iceoryx_config`]); iceoryx2's
+/// own tools see these scenes when their config names the same root.
+pub const ICEORYX2_ROOT: &str = "/dev/shm/iceoryx2/";
 
 /// How often helper threads and waiting readers check peers for liveness.
 pub const DEFAULT_LIVENESS_INTERVAL: Duration = Duration::from_millis(200);
@@ -598,6 +617,8 @@ pub struct PrefixError {
 /// [`PrefixError`] if the prefix is not a valid file name.
 pub fn iceoryx_config(prefix: Option<&str>) -> Result<Config, PrefixError> {
     let mut config = Config::global_config().clone();
+    let root = Path::new(ICEORYX2_ROOT.as_bytes()).expect("ICEORYX2_ROOT is a valid path");
+    config.global.set_root_path(&root);
     let from_env = std::env::var(ENV_IOX2_PREFIX).ok();
     if let Some(prefix) = prefix.or(from_env.as_deref()) {
         config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| PrefixError {
@@ -631,6 +652,22 @@ mod tests {
         let (decoded, offset) = decode_manifest_prefix(&buf).expect("valid prefix");
         assert_eq!(decoded, entries);
         assert_eq!(offset, len);
+    }
+
+    #[test]
+    fn a_stream_supports_the_segments_it_was_sized_for() {
+        for n in [1, 8, 42, 128, 512, MAX_LAYERS] {
+            assert_eq!(
+                stream_segments_supported(stream_buffer_size(n), stream_max_borrowed(n)),
+                n
+            );
+        }
+        // The smaller of the two limits wins.
+        assert_eq!(
+            stream_segments_supported(stream_buffer_size(64), stream_max_borrowed(8)),
+            8
+        );
+        assert_eq!(stream_segments_supported(0, 0), 0);
     }
 
     #[test]

@@ -11,7 +11,9 @@
 mod scene;
 
 #[doc(inline)]
-pub use scene::{PublishReport, SceneWriter, SceneWriterBuilder};
+pub use scene::{
+    MIN_DEFAULT_MAX_LAYERS, PublishReport, SceneWriter, SceneWriterBuilder, default_max_layers,
+};
 #[doc(inline)]
 pub use ygg_transport::{PublishError, WriterCreateError, WriterWaitError};
 

@@ -86,6 +86,11 @@ struct Serve {
     /// Readers the scene supports at once.
     #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
+    /// Most layers the scene may grow to (default: a quarter more than the served graph's,
+    /// at least 64 more);
+    /// a lower bound makes readers attach faster.
+    #[arg(long)]
+    max_layers: Option<usize>,
 }
 
 #[derive(Parser, Debug)]
@@ -262,9 +267,12 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let loaded = t.elapsed();
-    let mut writer = SceneWriter::builder(&args.scene)
-        .max_readers(args.max_readers)
-        .create(graph)?;
+    let builder = SceneWriter::builder(&args.scene).max_readers(args.max_readers);
+    let builder = match args.max_layers {
+        Some(n) => builder.max_layers(n),
+        None => builder,
+    };
+    let mut writer = builder.create(graph)?;
     let mut replay = SlamReplay::new(writer.graph(), 7);
     let first = writer.publish()?;
     println!(

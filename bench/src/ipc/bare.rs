@@ -14,7 +14,7 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::{FileName, Node, NodeBuilder, SemanticString, ServiceName};
+use iceoryx2::prelude::{FileName, Node, NodeBuilder, Path, SemanticString, ServiceName};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::Duration;
 
@@ -29,9 +29,15 @@ struct Bare {
 
 impl Bare {
     fn new(scene: &str, prefix: &str) -> Res<Self> {
+        // iceoryx2's own configuration but for the prefix and the root of its node files
+        // (Yggdrasil's, so the case's files are found and removed like every other case's).
         let mut config = Config::global_config().clone();
         config.global.prefix =
             FileName::new(prefix.as_bytes()).map_err(|e| format!("prefix: {e:?}"))?;
+        config.global.set_root_path(
+            &Path::new(ygg_transport::protocol::ICEORYX2_ROOT.as_bytes())
+                .map_err(|e| format!("root: {e:?}"))?,
+        );
         let node = NodeBuilder::new().config(&config).create::<Flavour>()?;
         Ok(Bare {
             node,

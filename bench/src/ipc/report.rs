@@ -315,9 +315,17 @@ fn floor_targets(rows: &[Row]) -> Vec<Target> {
             };
             let ratios = [within("writer_fds"), within("reader_fds"), within("shm_files")];
             let line = |r: &Row| {
+                let reference = find(&format!("{}_bound512", r.case)).map_or(String::new(), |x| {
+                    format!(
+                        " against {} at the bound 512 ({:.1}x)",
+                        fmt_us(x.median_us),
+                        x.median_us / r.median_us
+                    )
+                });
                 format!(
-                    "{} layers: attach p50 {} (from spawn {}; the reader process's CPU time to its answer {}), writer {} fds, reader {} fds, {} /dev/shm files",
+                    "{} layers, bound {}: attach p50 {}{reference} (from spawn {}; the reader process's CPU time to its answer {}), writer {} fds, reader {} fds, {} /dev/shm files",
                     r.get("layers").unwrap_or(f64::NAN),
+                    r.get("max_layers").unwrap_or(f64::NAN),
                     fmt_us(r.median_us),
                     fmt_us(r.get("from_spawn_median_us").unwrap_or(f64::NAN)),
                     fmt_us(r.get("process_cpu_us").unwrap_or(f64::NAN)),
@@ -445,7 +453,8 @@ pub struct Meta {
     pub rounds: usize,
     /// Wall time of the run.
     pub duration_s: f64,
-    /// Files left in /dev/shm or /tmp/iceoryx2 after a case (should be empty).
+    /// Files left below /dev/shm (iceoryx2's node files included) after a case (should be
+    /// empty).
     pub leftovers: Vec<String>,
     /// Method notes.
     pub notes: Vec<String>,

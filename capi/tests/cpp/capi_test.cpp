@@ -414,6 +414,15 @@ void writer_and_reader(const std::string& scene) {
   EXPECT_OK(ygg_writer_wait(writer, 1000000, &stop));
   EXPECT(!stop);
 
+  // A graph past the writer's layer bound is refused at publish, naming the bound.
+  ygg_graph* three_layers = build_graph();
+  ygg_writer_options bounded{0, 0, 2};
+  ygg_writer* bounded_writer = nullptr;
+  EXPECT_OK(ygg_writer_create((scene + "-bound").c_str(), three_layers, &bounded, &bounded_writer));
+  EXPECT_STATUS(ygg_writer_publish(bounded_writer, &report), YGG_STATUS_PUBLISH);
+  EXPECT(error_has("max_layers"));
+  EXPECT_OK(ygg_writer_destroy(bounded_writer));
+
   ygg_reader_options wait{5000, false, false};
   EXPECT_OK(ygg_reader_open(scene.c_str(), &wait, &reader));
   ygg_snapshot* s = nullptr;

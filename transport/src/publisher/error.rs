@@ -55,7 +55,9 @@ pub enum PublishError {
     ReservedLayerId(u32),
     /// A manifest names more segments than the writer was built for
     /// ([`PublisherBuilder::max_segments`](crate::PublisherBuilder::max_segments)).
-    #[error("a manifest may name at most {max} segments, this one names {count}")]
+    #[error(
+        "a snapshot may name at most {max} segments (layers), this one names {count}: create the writer with a higher max_segments (max_layers, --max-layers)"
+    )]
     TooManyLayers {
         /// Layers named.
         count: usize,

@@ -5,6 +5,10 @@ use std::path::Path;
 
 use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::prelude::{AllocationStrategy, Node};
+use iceoryx2::service::builder::publish_subscribe::{
+    PublishSubscribeOpenError, PublishSubscribeOpenOrCreateError,
+};
+use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
@@ -30,6 +34,9 @@ pub(crate) struct SegmentService {
     pub(crate) name: String,
     pub(crate) publisher: Publisher<Ipc, [Block128], SegmentHeader>,
     pub(crate) service: SegmentFactory,
+    /// Most segments one snapshot may name on this stream: what the writer asked for, or
+    /// less when the stream was created earlier for fewer.
+    pub(crate) max_segments: usize,
     /// What this writer wrote into the pool's chunks, to give back the pages a smaller
     /// segment leaves unused ([`loan::ChunkPages`]).
     pub(crate) pages: loan::ChunkPages,
@@ -74,24 +81,45 @@ where
 /// Never blocks: safe overflow (a reader that does not receive loses its oldest buffered
 /// samples, never stalls the writer) and bounded borrows per subscriber. There is room for
 /// one more subscriber than readers: the writer's own ([`super::retained`]).
+///
+/// A stream that readers keep alive from an earlier writer may have been sized for fewer
+/// segments than `settings` asks for; it is used as it is and [`SegmentService::max_segments`]
+/// says what it supports (the services of a scene cannot be resized while anyone holds them).
 pub(crate) fn open_segment_port(
     node: &Node<Ipc>,
     name: &str,
     settings: PortSettings,
 ) -> Result<SegmentService, WriterCreateError> {
-    let service = node
-        .service_builder(&crate::service::service_name(name)?)
-        .publish_subscribe::<[Block128]>()
-        .user_header::<SegmentHeader>()
-        .max_publishers(1)
-        .max_subscribers(settings.max_readers + 1)
-        .max_nodes(settings.max_readers + 2)
-        .history_size(0)
+    let service_name = crate::service::service_name(name)?;
+    let stream = || {
+        node.service_builder(&service_name)
+            .publish_subscribe::<[Block128]>()
+            .user_header::<SegmentHeader>()
+            .max_publishers(1)
+            .max_subscribers(settings.max_readers + 1)
+            .max_nodes(settings.max_readers + 2)
+            .history_size(0)
+            .enable_safe_overflow(true)
+    };
+    let opened = stream()
         .subscriber_max_buffer_size(protocol::stream_buffer_size(settings.max_segments))
         .subscriber_max_borrowed_samples(protocol::stream_max_borrowed(settings.max_segments))
-        .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| WriterCreateError::from(crate::service::service_failure(name, e)))?;
+        .open_or_create();
+    let service = match opened {
+        Err(PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(
+            PublishSubscribeOpenError::DoesNotSupportRequestedMinBufferSize
+            | PublishSubscribeOpenError::DoesNotSupportRequestedMinSubscriberBorrowedSamples,
+        )) => stream()
+            .open()
+            .map_err(|e| crate::service::service_failure(name, e))?,
+        opened => opened.map_err(|e| crate::service::service_failure(name, e))?,
+    };
+    let config = service.static_config();
+    let max_segments = protocol::stream_segments_supported(
+        config.subscriber_max_buffer_size(),
+        config.subscriber_max_borrowed_samples(),
+    )
+    .min(settings.max_segments);
     let publisher = service
         .publisher_builder()
         .max_loaned_samples(PUBLISHER_MAX_LOANED)
@@ -110,6 +138,7 @@ pub(crate) fn open_segment_port(
         name: name.to_owned(),
         publisher,
         service,
+        max_segments,
         pages: loan::ChunkPages::new(settings.initial_blocks),
     })
 }

@@ -80,9 +80,11 @@ impl PublisherBuilder {
 
     /// Most segments one snapshot may name (default [`DEFAULT_MAX_SEGMENTS`]); a manifest
     /// naming more is refused with [`PublishError::TooManyLayers`]. Sizes the segment
-    /// stream's pool (address space, see [`protocol::stream_max_borrowed`]); like
-    /// `max_readers`, a restarted writer must not ask for more than the services it reopens
-    /// were created with.
+    /// stream's pool: about `3 * max_segments` chunks per reader, each as large as the largest
+    /// segment, and a reader's attach initialises bookkeeping for all of them, so a bound
+    /// near the scene's real segment count makes attaching several times faster. A restarted
+    /// writer whose readers kept the stream of an earlier writer alive gets that stream's
+    /// bound if it is lower ([`SegmentPublisher::max_segments`]).
     pub fn max_segments(mut self, value: usize) -> Self {
         self.max_segments = value.clamp(1, protocol::MAX_LAYERS);
         self
@@ -140,6 +142,7 @@ impl PublisherBuilder {
         };
         let stream_name = services.segments();
         let stream = open_segment_port(&node, &stream_name, settings)?;
+        let max_segments = stream.max_segments;
         let own_subscriber = stream
             .service
             .subscriber_builder()
@@ -193,7 +196,7 @@ impl PublisherBuilder {
         Ok(SegmentPublisher {
             session: new_session_id(),
             shm_dir: self.shm_dir,
-            max_segments: self.max_segments,
+            max_segments,
             services,
             published: BTreeMap::new(),
             cut_started_unix_ns: None,
@@ -321,6 +324,12 @@ impl SegmentPublisher {
     /// tell a restarted writer's generations from the previous writer's.
     pub fn session(&self) -> u64 {
         self.session
+    }
+
+    /// Most segments one snapshot may name: [`PublisherBuilder::max_segments`], or less when
+    /// readers kept alive a stream an earlier writer created for fewer.
+    pub fn max_segments(&self) -> usize {
+        self.max_segments
     }
 
     /// The last generation published for `layer_id`, if any.

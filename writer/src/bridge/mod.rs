@@ -72,6 +72,10 @@ pub struct BridgeArgs {
     /// Readers the scene supports at once.
     #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
     max_readers: usize,
+    /// Most layers the bridged scene may grow to (a Hydra scene grows room by room and
+    /// per-room layouts add layers per room); a lower bound makes readers attach faster.
+    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_SEGMENTS)]
+    max_layers: usize,
 }
 
 /// Runs the bridge until a signal, `--seconds`, or a fatal error.
@@ -169,6 +173,7 @@ pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
             let layers = ygg_store::SceneView::layers(&target).count();
             let mut w = SceneWriter::builder(&args.scene)
                 .max_readers(args.max_readers)
+                .max_layers(args.max_layers)
                 .create(target)?;
             let r = w.publish()?;
             published += 1;

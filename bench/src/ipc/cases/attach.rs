@@ -2,12 +2,14 @@
 //! descriptors and shared-memory files, on the office and on the 103-room office.
 
 use super::super::child::ReaderProc;
+use super::super::child::Scene;
 use super::super::report::{Row, median};
 use super::super::{Res, check_interrupted, unix_ns};
-use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, reader_args, writer};
-use super::{Ctx, in_scene};
+use super::Ctx;
+use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, reader_args};
 use std::time::Instant;
 use ygg_store::{SceneGraph, SceneView};
+use ygg_writer::SceneWriter;
 
 /// Open descriptors of process `pid` (`self` for this one).
 fn descriptors(pid: &str) -> Res<usize> {
@@ -22,56 +24,130 @@ fn shm_files(prefix: &str) -> Res<usize> {
         .count())
 }
 
-/// An idle writer publishes `graph` once; `samples` reader processes attach one after the
-/// other, each timed from its start to its first nearest-node query answered.
+/// The layer bound the reference rows use: the fixed bound every writer had before bounds
+/// were sized from the scene.
+const REFERENCE_MAX_LAYERS: usize = ygg_transport::protocol::DEFAULT_MAX_SEGMENTS;
+
+/// One writer's scene and what its attaching readers measured.
+struct Attached {
+    scene: Scene,
+    writer: SceneWriter,
+    writer_fds: usize,
+    attach: Vec<f64>,
+    from_spawn: Vec<f64>,
+    cpu: Vec<f64>,
+    reader_fds: Vec<f64>,
+    files: Vec<f64>,
+}
+
+impl Attached {
+    /// An idle writer of `graph` (layer bound `max_layers`, default if `None`), published once.
+    fn start(tag: &str, graph: SceneGraph, max_layers: Option<usize>) -> Res<Attached> {
+        let scene = Scene::new(&format!("ipcb-{tag}"));
+        let before = descriptors("self")?;
+        let builder = SceneWriter::builder(&scene.name)
+            .iceoryx_prefix(&scene.prefix)
+            .max_readers(2)
+            .initial_segment_bytes(64 * 1024);
+        let mut writer = match max_layers {
+            Some(n) => builder.max_layers(n),
+            None => builder,
+        }
+        .create(graph)?;
+        writer.publish()?;
+        let writer_fds = descriptors("self")?.saturating_sub(before);
+        Ok(Attached {
+            scene,
+            writer,
+            writer_fds,
+            attach: Vec::new(),
+            from_spawn: Vec::new(),
+            cpu: Vec::new(),
+            reader_fds: Vec::new(),
+            files: Vec::new(),
+        })
+    }
+
+    /// One reader process attaches, answers and exits.
+    fn sample(&mut self) -> Res<()> {
+        let spawned = unix_ns();
+        let mut p = ReaderProc::spawn(
+            "attach reader".to_owned(),
+            &self.scene,
+            &reader_args("attach", Some(QUERY_LAYER)),
+        )?;
+        let line = p.expect("ready", Instant::now() + ATTACH_TIMEOUT)?;
+        let v: Vec<u64> = line
+            .split_whitespace()
+            .skip(1)
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        let [_, started, answered, cpu_ns] = v[..] else {
+            return Err(format!("malformed attach line {line:?}").into());
+        };
+        self.attach.push(answered.saturating_sub(started) as f64);
+        self.cpu.push(cpu_ns as f64);
+        self.from_spawn
+            .push(answered.saturating_sub(spawned) as f64);
+        self.reader_fds
+            .push(descriptors(&p.pid().to_string())? as f64);
+        self.files.push(shm_files(&self.scene.prefix)? as f64);
+        p.close_stdin();
+        p.finish(EXIT_GRACE)?;
+        Ok(())
+    }
+
+    /// The row, once the writer is gone and the scene's files are checked.
+    fn finish(self, ctx: &mut Ctx, case: &str, what: &str, layers: usize) -> Row {
+        let max_layers = self.writer.max_layers();
+        drop(self.writer);
+        if let Some(left) = self.scene.clean_up() {
+            ctx.leftovers.push(left);
+        }
+        Row::latency(case, what, &self.attach)
+            .with("from_spawn_median_us", median(&self.from_spawn) / 1e3)
+            .with("process_cpu_us", median(&self.cpu) / 1e3)
+            .with("layers", layers as f64)
+            .with("max_layers", max_layers as f64)
+            .with("writer_fds", self.writer_fds as f64)
+            .with("reader_fds", median(&self.reader_fds))
+            .with("shm_files", median(&self.files))
+    }
+}
+
+/// Two idle writers publish `graph` once, one with the layer bound sized from the scene (the
+/// default) and one with the fixed reference bound; `samples` reader processes attach to
+/// each, alternating between the two (ABBA), each timed from its start to its first
+/// nearest-node query answered. Rows `case` and `case_bound512`.
 pub(super) fn case_attach(
     ctx: &mut Ctx,
     case: &str,
     what: &str,
     graph: SceneGraph,
     samples: usize,
-) -> Res<Row> {
+) -> Res<Vec<Row>> {
     let layers = graph.layers().count();
-    in_scene(ctx, case, |_, scene| {
-        let before = descriptors("self")?;
-        let w = writer(scene, graph, 2, 64 * 1024)?;
-        let writer_fds = descriptors("self")?.saturating_sub(before);
-        let mut attach = Vec::with_capacity(samples);
-        let mut from_spawn = Vec::with_capacity(samples);
-        let mut cpu = Vec::with_capacity(samples);
-        let (mut reader_fds, mut files) = (Vec::new(), Vec::new());
-        for _ in 0..samples {
-            check_interrupted()?;
-            let spawned = unix_ns();
-            let mut p = ReaderProc::spawn(
-                "attach reader".to_owned(),
-                scene,
-                &reader_args("attach", Some(QUERY_LAYER)),
-            )?;
-            let line = p.expect("ready", Instant::now() + ATTACH_TIMEOUT)?;
-            let v: Vec<u64> = line
-                .split_whitespace()
-                .skip(1)
-                .filter_map(|x| x.parse().ok())
-                .collect();
-            let [_, started, answered, cpu_ns] = v[..] else {
-                return Err(format!("malformed attach line {line:?}").into());
-            };
-            attach.push(answered.saturating_sub(started) as f64);
-            cpu.push(cpu_ns as f64);
-            from_spawn.push(answered.saturating_sub(spawned) as f64);
-            reader_fds.push(descriptors(&p.pid().to_string())? as f64);
-            files.push(shm_files(&scene.prefix)? as f64);
-            p.close_stdin();
-            p.finish(EXIT_GRACE)?;
+    let mut sized = Attached::start(case, graph.clone(), None)?;
+    let mut reference = Attached::start(
+        &format!("{case}-bound512"),
+        graph,
+        Some(REFERENCE_MAX_LAYERS),
+    )?;
+    for i in 0..samples {
+        check_interrupted()?;
+        if i % 2 == 0 {
+            sized.sample()?;
+            reference.sample()?;
+        } else {
+            reference.sample()?;
+            sized.sample()?;
         }
-        drop(w);
-        Ok(Row::latency(case, what, &attach)
-            .with("from_spawn_median_us", median(&from_spawn) / 1e3)
-            .with("process_cpu_us", median(&cpu) / 1e3)
-            .with("layers", layers as f64)
-            .with("writer_fds", writer_fds as f64)
-            .with("reader_fds", median(&reader_fds))
-            .with("shm_files", median(&files)))
-    })
+    }
+    let reference_what = format!(
+        "reference: the same with the writer's layer bound at {REFERENCE_MAX_LAYERS} (every writer's bound before it was sized from the scene); samples alternate with the row above"
+    );
+    Ok(vec![
+        sized.finish(ctx, case, what, layers),
+        reference.finish(ctx, &format!("{case}_bound512"), &reference_what, layers),
+    ])
 }

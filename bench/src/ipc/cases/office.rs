@@ -13,7 +13,7 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
     rows.extend(case_office_mint(ctx)?);
     let samples = ctx.plan.attach_samples;
     let graph = ctx.office_mint()?;
-    rows.push(super::attach::case_attach(
+    rows.extend(super::attach::case_attach(
         ctx,
         "attach_office",
         "a new reader process attaches to the office (mint) and answers a nearest-node query: from its start to the answer; descriptors and /dev/shm files with one writer and this reader",
@@ -21,7 +21,7 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
         samples,
     )?);
     let graph = ctx.office_many_rooms()?;
-    rows.push(super::attach::case_attach(
+    rows.extend(super::attach::case_attach(
         ctx,
         "attach_office103",
         "the same on the office split into 103 rooms (mint)",
