@@ -70,12 +70,14 @@ impl Usage {
     }
 }
 
-/// Number of files of `scene`'s iceoryx2 prefix in `/dev/shm`.
+/// Number of shared-memory objects of `scene`'s iceoryx2 prefix: the files directly in
+/// `/dev/shm`, not iceoryx2's node and service files below it (those come and go with every
+/// reader process).
 pub fn shm_files(scene: &TestScene) -> usize {
     scene
         .files()
         .iter()
-        .filter(|p| p.starts_with(SHM_DIR))
+        .filter(|p| p.parent() == Some(std::path::Path::new(SHM_DIR)))
         .count()
 }
 
