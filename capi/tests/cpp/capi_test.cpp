@@ -389,7 +389,7 @@ void writer_and_reader(const std::string& scene) {
   std::size_t n = 0;
   EXPECT_OK(ygg_graph_node_count(g, &n));  // a failed create leaves the graph with the caller
   EXPECT(n == 8);
-  ygg_writer_options options{4, 4096};
+  ygg_writer_options options{4, 4096, 0};
   EXPECT_OK(ygg_writer_create(scene.c_str(), g, &options, &writer));
   EXPECT_STATUS(ygg_graph_node_count(g, &n), YGG_STATUS_INVALID_HANDLE);  // moved into the writer
   ygg_graph* other = build_graph();
