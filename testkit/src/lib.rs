@@ -25,6 +25,6 @@ mod watchdog;
 
 pub use binary::{ENV_BIN_DIR, binary, example, run, text};
 pub use proc::{DROP_GRACE, ENV_PARENT_PID, Input, LineError, Proc, die_with_parent, field};
-pub use scene::{ICEORYX2_DIR, PREFIX_TAG, SHM_DIR, TestScene, remove_stale};
+pub use scene::{PREFIX_TAG, SHM_DIR, TestScene, remove_stale};
 pub use veth::VethLink;
 pub use watchdog::Watchdog;

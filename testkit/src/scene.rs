@@ -1,6 +1,7 @@
 //! [`TestScene`]: a unique scene name and iceoryx2 prefix per test or run, and the scan
-//! of `/dev/shm` (iceoryx2's shared memory and, below [`ICEORYX2_DIR`], its node and service
-//! files) for the files of a prefix.
+//! of `/dev/shm` (iceoryx2's shared memory and, below
+//! [`ygg_transport::protocol::ICEORYX2_ROOT`], its node and service files) for the files of a
+//! prefix.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -10,10 +11,6 @@ use std::time::{Duration, Instant};
 use ygg_transport::protocol::ENV_IOX2_PREFIX;
 
 use crate::{Proc, Watchdog, binary};
-
-/// Where iceoryx2 keeps node and service files for Yggdrasil: inside [`SHM_DIR`], so the
-/// scans of [`SHM_DIR`] (recursive) cover it.
-pub const ICEORYX2_DIR: &str = ygg_transport::protocol::ICEORYX2_ROOT;
 
 /// The POSIX shared-memory directory.
 pub const SHM_DIR: &str = "/dev/shm";
@@ -77,7 +74,7 @@ impl TestScene {
     }
 
     /// Every file of this scene's prefix below `/dev/shm` (iceoryx2's node and service
-    /// files included, [`ICEORYX2_DIR`]).
+    /// files included: [`ygg_transport::protocol::ICEORYX2_ROOT`]).
     pub fn files(&self) -> Vec<PathBuf> {
         let mut found = Vec::new();
         collect(
