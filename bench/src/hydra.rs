@@ -224,6 +224,8 @@ struct Measured {
     /// than one message's 10 ms ticks; for the full office it includes the one-room
     /// graphs between).
     cpu_mean: f64,
+    /// [`Measured::cpu_mean`] split by process, in the order of the pids measured.
+    cpu_mean_per_process: Vec<f64>,
 }
 
 /// What changes between two measured messages.
@@ -248,7 +250,7 @@ fn measure(
     object: u64,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
     let mut m = Measured::default();
-    let batch0: f64 = cpu_pids.iter().map(|&p| cpu_seconds(p)).sum();
+    let batch0: Vec<f64> = cpu_pids.iter().map(|&p| cpu_seconds(p)).collect();
     for k in 0..messages {
         let dx = if k % 2 == 0 { 0.05 } else { -0.05 };
         if case == Case::New {
@@ -285,8 +287,9 @@ fn measure(
         m.last.push(*visible.last().expect("consumers"));
         m.cpu.push(cpu1 - cpu0);
     }
-    let batch1: f64 = cpu_pids.iter().map(|&p| cpu_seconds(p)).sum();
-    m.cpu_mean = (batch1 - batch0) / messages.max(1) as f64;
+    let per_message = |(&p, before): (&u32, &f64)| (cpu_seconds(p) - before) / messages.max(1) as f64;
+    m.cpu_mean_per_process = cpu_pids.iter().zip(&batch0).map(per_message).collect();
+    m.cpu_mean = m.cpu_mean_per_process.iter().sum();
     Ok(m)
 }
 
@@ -589,6 +592,22 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
             ms(*s),
             ms(*p)
         )?;
+    }
+    writeln!(
+        md,
+        "\nOur CPU per message by process (means over each batch, ms): the bridge; each reader.\n"
+    )?;
+    for (n, case, [ours, _]) in &results {
+        // The bridge is measured last (see `run`).
+        if let Some((bridge, readers)) = ours.cpu_mean_per_process.split_last() {
+            let readers: Vec<String> = readers.iter().map(|&c| ms(c)).collect();
+            writeln!(
+                md,
+                "- {case}, {n}: bridge {}; readers {}",
+                ms(*bridge),
+                readers.join(", ")
+            )?;
+        }
     }
     writeln!(md)?;
     writeln!(md, "Per-message samples (ms; CPU in ms):\n")?;

@@ -23,10 +23,18 @@
 //!   same office (with mesh) through spark_dsg's sender and receiver, each after the
 //!   tick's pose edit; send → received and decoded (`update_from_binary`), bytes per
 //!   message.
+//!
+//! With `--breakdown`, a reader of the robot's own scene (a thread here) records when each
+//! generation is visible on the robot, and the timed rows also give the writer's update +
+//! publish() call, that first hop, and the relay path from there to the remote reader.
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError, mpsc};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
@@ -59,6 +67,12 @@ pub struct RemoteArgs {
     /// The Python interpreter with spark_dsg 1.1.3 and pyzmq installed.
     #[arg(long, default_value = "python3")]
     pub python: String,
+    /// Also time each update's first hop: a reader of the robot's own scene (a thread
+    /// of this process, one more consumer on the robot) records when each generation is
+    /// visible there; rows then carry the writer's update + publish() call and that
+    /// local time beside the remote one.
+    #[arg(long)]
+    pub breakdown: bool,
 }
 
 /// Bound on any single wait.
@@ -155,6 +169,30 @@ struct Row {
     p99_us: f64,
     bytes: f64,
     samples: usize,
+    /// With `--breakdown`: the per-hop medians.
+    hops: Option<Hops>,
+}
+
+/// Where an update's time goes (medians, µs, each over the samples that have it).
+#[derive(Clone, Copy)]
+struct Hops {
+    /// Update start → the writer's publish() call returned.
+    publish_call_us: f64,
+    /// Update start → visible in a reader on the robot (first shared-memory hop).
+    local_us: f64,
+    /// Visible on the robot → visible remotely (exporter, Zenoh, importer, remote hop).
+    relay_us: f64,
+}
+
+/// One update's times from its start, seconds.
+#[derive(Clone, Copy)]
+struct Timing {
+    /// Visible in the remote reader.
+    remote: f64,
+    /// The writer's publish() call returned.
+    publish_call: f64,
+    /// Visible in the robot's own reader (with `--breakdown`).
+    local: Option<f64>,
 }
 
 impl Row {
@@ -167,12 +205,114 @@ impl Row {
             p99_us,
             bytes,
             samples: latency_s.len(),
+            hops: None,
+        }
+    }
+
+    /// A row of updates timed by [`Relay::publish_and_wait`]; with per-hop medians when
+    /// the local times were recorded.
+    fn timed(case: &'static str, timings: &[Timing], bytes: f64) -> Self {
+        let remote: Vec<f64> = timings.iter().map(|t| t.remote).collect();
+        let locals: Vec<(f64, f64)> = timings
+            .iter()
+            .filter_map(|t| t.local.map(|l| (l, t.remote - l)))
+            .collect();
+        let us = |v: Vec<f64>| median(&v) * 1e6;
+        let hops = (!locals.is_empty()).then(|| Hops {
+            publish_call_us: us(timings.iter().map(|t| t.publish_call).collect()),
+            local_us: us(locals.iter().map(|l| l.0).collect()),
+            relay_us: us(locals.iter().map(|l| l.1).collect()),
+        });
+        Self {
+            hops,
+            ..Self::new(case, &remote, bytes)
         }
     }
 
     fn json(&self) -> serde_json::Value {
-        serde_json::json!({"case": self.case, "median_us": self.median_us,
-            "p99_us": self.p99_us, "bytes": self.bytes, "samples": self.samples})
+        let mut row = serde_json::json!({"case": self.case, "median_us": self.median_us,
+            "p99_us": self.p99_us, "bytes": self.bytes, "samples": self.samples});
+        if let Some(h) = self.hops {
+            row["publish_call_us"] = h.publish_call_us.into();
+            row["local_visible_us"] = h.local_us.into();
+            row["relay_us"] = h.relay_us.into();
+        }
+        row
+    }
+}
+
+/// With `--breakdown`: a reader of the robot's own scene in a thread, recording when each
+/// generation became visible on the robot.
+struct LocalWatch {
+    seen: Arc<Mutex<HashMap<u64, Instant>>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl LocalWatch {
+    /// Opens the reader (in its thread: a reader stays on the thread that opened it).
+    fn start(scene: &str, prefix: &str) -> Result<Self, Box<dyn std::error::Error>> {
+        let seen: Arc<Mutex<HashMap<u64, Instant>>> = Arc::default();
+        let stop = Arc::new(AtomicBool::new(false));
+        let (opened, open_result) = mpsc::channel();
+        let (scene, prefix) = (scene.to_owned(), prefix.to_owned());
+        let (record, stopped) = (Arc::clone(&seen), Arc::clone(&stop));
+        let thread = std::thread::spawn(move || {
+            let reader = SceneReader::builder(&scene)
+                .iceoryx_prefix(&prefix)
+                .wait_for_writer(STEP)
+                .open();
+            let mut reader = match reader {
+                Ok(r) => {
+                    let _ = opened.send(Ok(()));
+                    r
+                }
+                Err(e) => {
+                    let _ = opened.send(Err(e.to_string()));
+                    return;
+                }
+            };
+            while !stopped.load(Ordering::Relaxed) {
+                if let Ok(Some(s)) = reader.wait_next(Duration::from_millis(50)) {
+                    let at = Instant::now();
+                    record
+                        .lock()
+                        .unwrap_or_else(PoisonError::into_inner)
+                        .insert(s.generation(), at);
+                }
+            }
+        });
+        open_result.recv()??;
+        Ok(Self {
+            seen,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// When `generation` became visible on the robot; waits up to a second for it.
+    fn visible(&self, generation: u64) -> Option<Instant> {
+        let until = Instant::now() + Duration::from_secs(1);
+        loop {
+            let seen = self.seen.lock().unwrap_or_else(PoisonError::into_inner);
+            if let Some(&at) = seen.get(&generation) {
+                return Some(at);
+            }
+            drop(seen);
+            if Instant::now() > until {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+}
+
+impl Drop for LocalWatch {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
     }
 }
 
@@ -183,6 +323,8 @@ struct Relay<'a> {
     reader: SceneReader,
     exporter: Proc,
     importer: Proc,
+    /// With `--breakdown`.
+    local: Option<LocalWatch>,
 }
 
 impl Relay<'_> {
@@ -194,8 +336,10 @@ impl Relay<'_> {
             reader,
             mut exporter,
             mut importer,
+            local,
             ..
         } = self;
+        drop(local);
         for proc in [&mut importer, &mut exporter] {
             proc.signal(rustix::process::Signal::TERM);
             if proc.wait_timeout(Duration::from_secs(10)).is_none() {
@@ -211,15 +355,29 @@ impl Relay<'_> {
     }
 
     /// Publishes what changed; waits until the remote reader holds that generation.
-    /// Returns publish start → remote visible, in seconds, and the wire bytes.
-    fn publish_and_wait(&mut self, t0: Instant) -> Result<(f64, u64), Box<dyn std::error::Error>> {
+    /// Returns the update's times from `t0` (its start) and the wire bytes.
+    fn publish_and_wait(
+        &mut self,
+        t0: Instant,
+    ) -> Result<(Timing, u64), Box<dyn std::error::Error>> {
         let bytes0 = self.link.wire_bytes(self.exporter.pid())?;
         let generation = self.writer.publish()?.generation;
-        let elapsed = self.wait_for(generation, t0)?;
+        let publish_call = t0.elapsed().as_secs_f64();
+        let remote = self.wait_for(generation, t0)?;
+        let local = self
+            .local
+            .as_ref()
+            .and_then(|w| w.visible(generation))
+            .map(|at| at.saturating_duration_since(t0).as_secs_f64());
         // Let the acknowledgements of the update cross too.
         std::thread::sleep(TICK / 2);
         let bytes = self.link.wire_bytes(self.exporter.pid())? - bytes0;
-        Ok((elapsed, bytes))
+        let timing = Timing {
+            remote,
+            publish_call,
+            local,
+        };
+        Ok((timing, bytes))
     }
 
     /// Waits until the remote reader holds `generation` or newer; seconds since `t0`.
@@ -342,12 +500,18 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         .iceoryx_prefix(&remote.prefix)
         .wait_for_writer(STEP)
         .open()?;
+    let local = if args.breakdown {
+        Some(LocalWatch::start(&robot.name, &robot.prefix)?)
+    } else {
+        None
+    };
     let mut relay = Relay {
         link: &link,
         writer,
         reader,
         exporter,
         importer,
+        local,
     };
     relay.wait_for(first, t0)?;
     eprintln!(
@@ -369,7 +533,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         std::thread::sleep(TICK);
     }
-    rows.push(Row::new("pose_update", &lat, median(&bytes)));
+    rows.push(Row::timed("pose_update", &lat, median(&bytes)));
     eprintln!("pose_update done");
 
     // One-object moves.
@@ -388,7 +552,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         bytes.push(b as f64);
         std::thread::sleep(TICK);
     }
-    rows.push(Row::new("object_move", &lat, median(&bytes)));
+    rows.push(Row::timed("object_move", &lat, median(&bytes)));
     eprintln!("object_move done");
 
     // Resync after the link comes back.
@@ -425,7 +589,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         total += b;
         std::thread::sleep(TICK.saturating_sub(t0.elapsed()));
     }
-    rows.push(Row::new(
+    rows.push(Row::timed(
         "stream_bytes_ygg",
         &lat,
         total as f64 / ticks as f64,
@@ -553,6 +717,27 @@ fn report(
         out,
         "\nspark_dsg message (to_binary with mesh): {message_bytes} bytes\n"
     );
+    if rows.iter().any(|r| r.hops.is_some()) {
+        let _ = writeln!(
+            out,
+            "Per hop (`--breakdown`, medians µs from the update's start): the writer's update + \
+             publish() call; visible in a reader on the robot (the first shared-memory hop); \
+             from there to the remote reader (exporter, Zenoh over the veth, importer's \
+             validation and republish, the remote shared-memory hop).\n"
+        );
+        let _ = writeln!(out, "| case | update + publish() | → robot's reader | → remote (relay path) | remote |");
+        let _ = writeln!(out, "|---|---|---|---|---|");
+        for r in rows {
+            if let Some(h) = r.hops {
+                let _ = writeln!(
+                    out,
+                    "| {} | {:.0} | {:.0} | {:.0} | {:.0} |",
+                    r.case, h.publish_call_us, h.local_us, h.relay_us, r.median_us
+                );
+            }
+        }
+        let _ = writeln!(out);
+    }
     if let Some(p) = find("pose_update") {
         let _ = writeln!(
             out,

@@ -170,10 +170,14 @@ impl Exporter<'_> {
 }
 
 /// Puts one payload; reliable, and blocking rather than dropping when the link is congested.
+/// Express: sent at once rather than held for Zenoh's batching (a segment is already large
+/// and its manifest follows it). Measured (`ygg-bench remote`, same window, quiet host): one-
+/// pose update p50 1.36-1.44 ms (three runs) against 1.87 ms batched, p99 2.2-2.5 against 4.0.
 fn put(session: &zenoh::Session, key: &str, payload: Vec<u8>) -> Result<(), String> {
     session
         .put(key, payload)
         .congestion_control(CongestionControl::Block)
+        .express(true)
         .wait()
         .map_err(|e| format!("zenoh put on {key}: {e}"))
 }
