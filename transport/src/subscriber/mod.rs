@@ -3,6 +3,7 @@
 
 mod assembly;
 mod error;
+mod process_watch;
 mod segment;
 pub(crate) use segment::HeldSegment;
 mod segment_subscriber;

@@ -11,6 +11,7 @@ use iceoryx2::port::ReceiveError as IoxReceiveError;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::node::NodeView as _;
 use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
@@ -20,6 +21,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use iceoryx2_bb_posix::signal::SignalHandler;
 
 use super::assembly::Assembly;
+use super::process_watch::ProcessWatch;
 use super::segment::HeldSegment;
 use super::snapshot::Snapshot;
 use super::{ReaderOpenError, ReceiveError};
@@ -176,6 +178,7 @@ impl SubscriberBuilder {
             gone_unreported: false,
             next_liveness_check: Instant::now(),
             fast_checks_until: None,
+            writer_process: ProcessWatch::default(),
             events,
             hello,
             _events_service: events_service,
@@ -234,6 +237,8 @@ pub struct SegmentSubscriber {
     gone_unreported: bool,
     next_liveness_check: Instant,
     fast_checks_until: Option<Instant>,
+    /// The writer's process, between iceoryx2's checks of its node.
+    writer_process: ProcessWatch,
     events: Listener<Ipc>,
     hello: Notifier<Ipc>,
     _events_service: EventFactory<Ipc>,
@@ -418,9 +423,14 @@ impl SegmentSubscriber {
             });
         let alive = match writer {
             None => false,
+            Some(id) if self.writer_process.runs(id) => true,
             Some(id) => match Node::<Ipc>::state_of(&self.config, id) {
-                Ok(Some(NodeState::Alive(_))) => true,
+                Ok(Some(NodeState::Alive(view))) => {
+                    self.writer_process.confirmed(id, view.details().as_ref());
+                    true
+                }
                 Ok(Some(NodeState::Dead(_)) | None) => {
+                    self.writer_process.forget();
                     // Frees the dead writer's publisher slot (so a restarted writer can claim
                     // it) and wakes other readers. Held samples stay mapped.
                     self.node.try_cleanup_dead_nodes();

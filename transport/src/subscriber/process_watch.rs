@@ -1,0 +1,173 @@
+//! A cheap check, between iceoryx2's own, that the writer's process still runs.
+//!
+//! iceoryx2's liveness check of one node ([`Node::state_of`](iceoryx2::prelude::Node)) lists
+//! every node of the system and reads and parses each one's details file (TOML holding a
+//! whole iceoryx2 config) until it finds the node: about half a millisecond with a handful
+//! of processes, in every reader at every liveness interval. Measured with a bridge and four
+//! readers (`ygg-bench hydra`), that was most of an idle reader's CPU.
+//!
+//! After iceoryx2 has found the writer's node alive once, a [`ProcessWatch`] opens a pidfd
+//! on the node's process (Linux 5.3 or later) and later checks only that: a poll that does
+//! not wait tells whether the process has exited. iceoryx2 stays the authority: a process
+//! that exited, a different node, and every [`CONFIRM_INTERVAL`] go through its check again.
+//! The pidfd is kept only when the process's executable name matches the node's details,
+//! so a node of another pid namespace (whose pid means another process here) never gets
+//! one and is always checked the iceoryx2 way.
+
+use std::os::fd::OwnedFd;
+use std::time::{Duration, Instant};
+
+use iceoryx2::identifiers::UniqueNodeId;
+use iceoryx2::node::NodeDetails;
+use iceoryx2::prelude::SemanticString as _;
+use rustix::event::{PollFd, PollFlags, Timespec, poll};
+use rustix::process::{Pid, PidfdFlags, pidfd_open};
+
+/// How long a pidfd's answer stands before iceoryx2's check confirms the node again.
+pub(super) const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);
+
+/// The writer node's process, watched through a pidfd.
+#[derive(Debug, Default)]
+pub(super) struct ProcessWatch {
+    watched: Option<Watched>,
+}
+
+#[derive(Debug)]
+struct Watched {
+    node: UniqueNodeId,
+    pidfd: OwnedFd,
+    confirmed: Instant,
+}
+
+impl ProcessWatch {
+    /// Whether `node`'s process is known to run without asking iceoryx2: it is the node
+    /// watched, its process has not exited, and iceoryx2 confirmed it alive less than
+    /// [`CONFIRM_INTERVAL`] ago. `false` means "ask iceoryx2", not "dead".
+    pub(super) fn runs(&self, node: UniqueNodeId) -> bool {
+        let Some(w) = &self.watched else {
+            return false;
+        };
+        if w.node != node || w.confirmed.elapsed() >= CONFIRM_INTERVAL {
+            return false;
+        }
+        let mut fds = [PollFd::new(&w.pidfd, PollFlags::IN)];
+        // A pidfd polls readable once its process has exited.
+        matches!(poll(&mut fds, Some(&Timespec::default())), Ok(0))
+    }
+
+    /// iceoryx2 found `node` alive, with these details: watch its process from now on.
+    pub(super) fn confirmed(&mut self, node: UniqueNodeId, details: Option<&NodeDetails>) {
+        if let Some(w) = &mut self.watched
+            && w.node == node
+        {
+            w.confirmed = Instant::now();
+            return;
+        }
+        self.watched = details.and_then(|d| {
+            let pidfd = open_matching(d)?;
+            Some(Watched {
+                node,
+                pidfd,
+                confirmed: Instant::now(),
+            })
+        });
+    }
+
+    /// Forgets the watched process (iceoryx2 found its node dead or gone).
+    pub(super) fn forget(&mut self) {
+        self.watched = None;
+    }
+}
+
+/// A pidfd on the process `details` names, if a process with that pid runs here under the
+/// executable name the details give.
+fn open_matching(details: &NodeDetails) -> Option<OwnedFd> {
+    let pid = Pid::from_raw(details.process_id().value())?;
+    let pidfd = pidfd_open(pid, PidfdFlags::empty()).ok()?;
+    // Read after the pidfd is open: if the pid was reused in between, the name read is the
+    // new process's, and a match then means the same executable under the same pid, which
+    // the periodic confirmation settles.
+    let comm = std::fs::read(format!("/proc/{}/comm", pid.as_raw_nonzero())).ok()?;
+    let comm = comm.strip_suffix(b"\n").unwrap_or(&comm);
+    let executable = details.executable().as_bytes();
+    // The kernel keeps the first 15 bytes of the name.
+    let same = !comm.is_empty() && executable.starts_with(comm) && {
+        comm.len() == executable.len() || comm.len() == 15
+    };
+    same.then_some(pidfd)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::{Ipc, iceoryx_config};
+    use iceoryx2::node::NodeView as _;
+    use iceoryx2::prelude::*;
+
+    /// A node of this process, and its details as iceoryx2 reads them back.
+    fn own_node(prefix: &str) -> (Node<Ipc>, Option<NodeDetails>) {
+        let prefix = format!("ygg_pw_{prefix}_{}_", std::process::id());
+        let config = iceoryx_config(Some(&prefix)).expect("config");
+        let node = NodeBuilder::new()
+            .config(&config)
+            .create::<Ipc>()
+            .expect("node");
+        let details = match Node::<Ipc>::state_of(&config, *node.id()) {
+            Ok(Some(NodeState::Alive(view))) => view.details().clone(),
+            other => panic!("own node not alive: {other:?}"),
+        };
+        (node, details)
+    }
+
+    #[test]
+    fn a_confirmed_node_of_a_running_process_is_watched_and_no_other() {
+        let (node, details) = own_node("a");
+        let id = *node.id();
+        let mut watch = ProcessWatch::default();
+        assert!(!watch.runs(id), "nothing watched yet");
+        assert!(open_matching(details.as_ref().expect("details")).is_some());
+        watch.confirmed(id, details.as_ref());
+        assert!(watch.runs(id), "this process runs");
+        let (other, _) = own_node("b");
+        assert!(!watch.runs(*other.id()), "another node is not the one watched");
+        watch.forget();
+        assert!(!watch.runs(id), "forgotten");
+        watch.confirmed(id, None);
+        assert!(!watch.runs(id), "no details, nothing to watch");
+    }
+
+    #[test]
+    fn an_exited_process_no_longer_runs() {
+        let (node, _) = own_node("c");
+        let id = *node.id();
+        let mut child = std::process::Command::new("sleep")
+            .arg("30")
+            .spawn()
+            .expect("sleep");
+        let pid = Pid::from_raw(child.id().cast_signed()).expect("pid");
+        let watch = ProcessWatch {
+            watched: Some(Watched {
+                node: id,
+                pidfd: pidfd_open(pid, PidfdFlags::empty()).expect("pidfd"),
+                confirmed: Instant::now(),
+            }),
+        };
+        assert!(watch.runs(id), "the child runs");
+        child.kill().expect("kill");
+        child.wait().expect("reap");
+        assert!(!watch.runs(id), "the child exited");
+    }
+
+    #[test]
+    fn an_answer_older_than_the_confirm_interval_is_asked_again() {
+        let (node, details) = own_node("d");
+        let id = *node.id();
+        let mut watch = ProcessWatch::default();
+        watch.confirmed(id, details.as_ref());
+        let w = watch.watched.as_mut().expect("watched");
+        w.confirmed = Instant::now() - CONFIRM_INTERVAL;
+        assert!(!watch.runs(id), "stale: iceoryx2 must confirm");
+        watch.confirmed(id, details.as_ref());
+        assert!(watch.runs(id), "confirmed again");
+    }
+}
