@@ -287,7 +287,8 @@ fn measure(
         m.last.push(*visible.last().expect("consumers"));
         m.cpu.push(cpu1 - cpu0);
     }
-    let per_message = |(&p, before): (&u32, &f64)| (cpu_seconds(p) - before) / messages.max(1) as f64;
+    let per_message =
+        |(&p, before): (&u32, &f64)| (cpu_seconds(p) - before) / messages.max(1) as f64;
     m.cpu_mean_per_process = cpu_pids.iter().zip(&batch0).map(per_message).collect();
     m.cpu_mean = m.cpu_mean_per_process.iter().sum();
     Ok(m)

@@ -725,7 +725,10 @@ fn report(
              from there to the remote reader (exporter, Zenoh over the veth, importer's \
              validation and republish, the remote shared-memory hop).\n"
         );
-        let _ = writeln!(out, "| case | update + publish() | → robot's reader | → remote (relay path) | remote |");
+        let _ = writeln!(
+            out,
+            "| case | update + publish() | → robot's reader | → remote (relay path) | remote |"
+        );
         let _ = writeln!(out, "|---|---|---|---|---|");
         for r in rows {
             if let Some(h) = r.hops {

@@ -115,6 +115,22 @@ pub(crate) fn build_graph(
     Builder::new(source_name, options, progress).build(raw)
 }
 
+/// One node record converted as [`build_graph`] converts each (strictly), for a body
+/// whose other records are those of a graph already built; the node may only be in
+/// `layer` (the layer its record had there). `None` for anything `build_graph` would
+/// refuse or place elsewhere: the caller then builds the whole body, which reports it.
+pub(crate) fn build_node_in_layer(
+    raw: RawNode<'_>,
+    layer: LayerKey,
+    labelspaces: &BTreeMap<String, BTreeMap<u32, String>>,
+    source_name: &str,
+) -> Option<DsgNode> {
+    let mut progress = |_| {};
+    let builder = Builder::new(source_name, ImportOptions::STRICT, &mut progress);
+    let declared = Declared::Keys(BTreeSet::from([layer]));
+    builder.node(raw, false, &declared, labelspaces).ok()
+}
+
 struct Builder<'p> {
     file: String,
     lenient: bool,

@@ -105,6 +105,24 @@ pub(super) fn read_graph<'a>(
     version: DsgVersion,
     progress: &mut dyn FnMut(ImportProgress),
 ) -> Decoded<RawFile<'a>> {
+    read_graph_indexed(c, version, progress).map(|(raw, _)| raw)
+}
+
+/// Where a body's node records lie, and what decoding one of them again needs.
+pub(super) struct NodeRecords {
+    /// The body's node attribute types.
+    pub types: TypeTable<NodeLayout>,
+    /// The cursor offset of each node record, then the offset just past the last one.
+    pub bounds: Vec<usize>,
+}
+
+/// [`read_graph`], also giving where the node records lie (`None` before Spark-DSG 1.1.0,
+/// whose nodes come in two arrays).
+pub(super) fn read_graph_indexed<'a>(
+    c: &mut Cursor<'a>,
+    version: DsgVersion,
+    progress: &mut dyn FnMut(ImportProgress),
+) -> Decoded<(RawFile<'a>, Option<NodeRecords>)> {
     let total = Some(c.total_len() as u64);
     let report = |c: &Cursor<'_>, progress: &mut dyn FnMut(ImportProgress)| {
         progress(ImportProgress::new(
@@ -167,14 +185,20 @@ pub(super) fn read_graph<'a>(
     report(c, progress);
 
     let mut nodes = Vec::new();
+    let mut bounds = Vec::new();
     let arrays = if v.before(1, 1, 0) { 2 } else { 1 };
+    let mut records_end = c.offset();
     for _ in 0..arrays {
         c.dyn_start("nodes")?;
+        records_end = c.offset();
         while !c.dyn_end("nodes")? {
             let i = nodes.len();
+            bounds.push(c.offset());
             nodes.push(node(c, &node_types, v).map_err(|e| e.within(format!("nodes[{i}]")))?);
+            records_end = c.offset();
         }
     }
+    bounds.push(records_end);
     report(c, progress);
 
     let mut edges = Vec::new();
@@ -184,7 +208,11 @@ pub(super) fn read_graph<'a>(
         edges.push(edge(c, &edge_types, v).map_err(|e| e.within(format!("edges[{i}]")))?);
     }
     report(c, progress);
-    Ok(RawFile {
+    let records = (arrays == 1).then_some(NodeRecords {
+        types: node_types,
+        bounds,
+    });
+    let raw = RawFile {
         header: Some(RawHeader {
             version: RawVersion {
                 major: version.major,
@@ -199,7 +227,17 @@ pub(super) fn read_graph<'a>(
         edges: Some(edges),
         mesh: None,
         metadata,
-    })
+    };
+    Ok((raw, records))
+}
+
+/// Decodes the node record at `c`, as the body `records` came from does.
+pub(super) fn read_node_record<'a>(
+    c: &mut Cursor<'a>,
+    records: &NodeRecords,
+    version: DsgVersion,
+) -> Decoded<RawNode<'a>> {
+    node(c, &records.types, Ver(version))
 }
 
 /// An INT64 layer id, which the model holds as u32.

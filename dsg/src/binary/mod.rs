@@ -35,7 +35,7 @@ mod stream;
 mod writer;
 
 pub use self::export::{to_binary_body, to_binary_bytes, write_binary};
-pub use self::stream::{BodyStream, StreamStep};
+pub use self::stream::{BodyStream, ChangedNodes, StreamStep};
 
 use self::reader::DecodeError;
 use crate::error::DsgImportError;

@@ -12,17 +12,24 @@
 //!   check fails, the body is decoded in full, which reports the error exactly as
 //!   [`parse_binary_body`](super::parse_binary_body) does.
 //!
+//! * when the bytes that differ all lie within node records, and re-decoding just those
+//!   records (from the last body's record offsets) ends exactly where the unchanged rest
+//!   resumes, only those records are decoded: the graph is the last one with those nodes
+//!   replaced, provided each keeps its id and layer (so the edges, parents, layers and
+//!   mesh, byte for byte the same, mean the same) and claims only vertices of the mesh.
+//!   Finding them costs a comparison from each end of the two bodies.
+//!
 //! Invariant: the graph [`BodyStream::decode`] yields equals
 //! `parse_binary_body(body, version, source_name)` for every body, and a body that does
 //! not decode leaves the stream as it was.
 
 use std::ops::Range;
 
-use super::graph;
+use super::graph::{self, NodeRecords};
 use super::reader::Cursor;
 use crate::error::DsgImportError;
-use crate::json::build_graph;
-use crate::model::{DsgGraph, DsgVersion};
+use crate::json::{build_graph, build_node_in_layer};
+use crate::model::{DsgGraph, DsgNode, DsgVersion};
 use crate::report::ImportOptions;
 
 /// A decoder for successive header-less bodies of one stream (Spark-DSG's ZMQ messages,
@@ -57,20 +64,45 @@ pub struct BodyStream<B> {
     last: Option<Last<B>>,
 }
 
-/// The last good body, where its mesh section starts, and its graph.
+/// The last good body, where its mesh section starts and its node records lie, and its
+/// graph.
 struct Last<B> {
     body: B,
     tail: Range<usize>,
+    /// `None` for versions before 1.1.0.
+    records: Option<NodeRecords>,
     graph: DsgGraph,
+}
+
+/// The nodes that alone differ from the previous graph, when only their records changed.
+#[derive(Debug)]
+pub struct ChangedNodes {
+    /// The index in [`DsgGraph::nodes`] of the first.
+    pub first: usize,
+    /// Their values in the previous graph, in order (the new ones follow `first`).
+    pub previous: Vec<DsgNode>,
+}
+
+/// Node records decoded again, ready to replace the last graph's.
+struct Redecoded {
+    first: usize,
+    nodes: Vec<DsgNode>,
+    /// Offsets of the records after the first one decoded (the new body's).
+    starts: Vec<usize>,
+    /// New body length minus the last one's.
+    delta: isize,
 }
 
 /// What [`BodyStream::decode`] did with a body that differs from the last one.
 #[derive(Debug)]
 pub struct StreamStep {
-    /// The stream's graph before this body (`None` for the first body, or after
-    /// [`BodyStream::forget`]). When `mesh_reused`, its mesh has moved to the new graph
-    /// and this one's is `None`.
+    /// The stream's graph before this body (`None` for the first body, after
+    /// [`BodyStream::forget`], or when `changed_nodes` says what changed). When
+    /// `mesh_reused`, its mesh has moved to the new graph and this one's is `None`.
     pub previous: Option<DsgGraph>,
+    /// When only some node records differed and only those were decoded: which nodes
+    /// changed, with their previous values; everything else is the previous graph's.
+    pub changed_nodes: Option<ChangedNodes>,
     /// Whether the mesh section (mesh flag, mesh, end of buffer) was byte for byte the
     /// previous body's, so that its decoded mesh was reused: the two graphs have the
     /// same mesh (or both none).
@@ -99,7 +131,8 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         self.last = None;
     }
 
-    /// Decodes `body`, reusing the last body's mesh when the mesh section is unchanged.
+    /// Decodes `body`, reusing the last body's mesh when the mesh section is unchanged,
+    /// and the last graph's nodes when only some node records changed.
     /// Returns `None`, and keeps the last graph, when `body` equals the last body byte
     /// for byte; otherwise the new graph is [`BodyStream::graph`].
     ///
@@ -114,11 +147,16 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         {
             return Ok(None);
         }
+        super::check_version(self.version, &self.source_name)?;
+        let body = match self.replace_changed_records(body) {
+            Ok(step) => return Ok(Some(step)),
+            Err(body) => body,
+        };
         let bytes = body.as_ref();
         let c = &mut Cursor::new(bytes, 0);
         let err = |e: super::reader::DecodeError| e.into_import(&self.source_name);
-        super::check_version(self.version, &self.source_name)?;
-        let raw = graph::read_graph(c, self.version, &mut |_| {}).map_err(err)?;
+        let (raw, records) =
+            graph::read_graph_indexed(c, self.version, &mut |_| {}).map_err(err)?;
         let tail = c.position()..bytes.len();
         let same_tail = self
             .last
@@ -149,13 +187,141 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         };
         let previous = self
             .last
-            .replace(Last { body, tail, graph })
+            .replace(Last {
+                body,
+                tail,
+                records,
+                graph,
+            })
             .map(|l| l.graph);
         Ok(Some(StreamStep {
             previous,
             mesh_reused,
+            changed_nodes: None,
         }))
     }
+
+    /// The step for `body` when only node records changed (see the module docs), applied
+    /// to the last graph; `Err(body)` when that does not hold and the body must be
+    /// decoded in full.
+    fn replace_changed_records(&mut self, body: B) -> Result<StreamStep, B> {
+        let Some(r) = self.redecode_changed_records(body.as_ref()) else {
+            return Err(body);
+        };
+        let last = self.last.as_mut().expect("a last body was compared");
+        let records = last.records.as_mut().expect("records were compared");
+        let end = r.first + r.nodes.len();
+        let mut previous = Vec::with_capacity(r.nodes.len());
+        for (old, mut node) in last.graph.nodes[r.first..end].iter_mut().zip(r.nodes) {
+            // Parents come from the edges, which did not change.
+            node.parent = old.parent;
+            previous.push(std::mem::replace(old, node));
+        }
+        let shift = |b: usize| b.checked_add_signed(r.delta).expect("within the new body");
+        records.bounds[r.first + 1..end].copy_from_slice(&r.starts);
+        for b in &mut records.bounds[end..] {
+            *b = shift(*b);
+        }
+        last.tail = shift(last.tail.start)..body.as_ref().len();
+        last.body = body;
+        Ok(StreamStep {
+            previous: None,
+            mesh_reused: true,
+            changed_nodes: Some(ChangedNodes {
+                first: r.first,
+                previous,
+            }),
+        })
+    }
+
+    /// Decodes again the node records of `new` that differ from the last body's, when
+    /// nothing else differs and each keeps its node's id and layer; `None` otherwise.
+    fn redecode_changed_records(&self, new: &[u8]) -> Option<Redecoded> {
+        let last = self.last.as_ref()?;
+        let records = last.records.as_ref()?;
+        let old = last.body.as_ref();
+        let bounds = &records.bounds;
+        let n = bounds.len().checked_sub(1).filter(|&n| n > 0)?;
+        if last.graph.nodes.len() != n {
+            return None;
+        }
+        let prefix = common_prefix(old, new);
+        if prefix < bounds[0] {
+            return None;
+        }
+        let suffix = common_suffix(old, new, old.len().min(new.len()) - prefix);
+        if old.len() - suffix > bounds[n] {
+            return None;
+        }
+        // The record holding the first byte that differs.
+        let first = (bounds.partition_point(|&b| b <= prefix) - 1).min(n - 1);
+        let delta = isize::try_from(new.len()).ok()? - isize::try_from(old.len()).ok()?;
+        let unchanged_from = new.len() - suffix;
+        let mut c = Cursor::new(new.get(bounds[first]..)?, bounds[first]);
+        let (mut nodes, mut starts) = (Vec::new(), Vec::new());
+        let mut k = first;
+        while k == first || c.offset() < unchanged_from {
+            let old_node = last.graph.nodes.get(k)?;
+            if k > first {
+                starts.push(c.offset());
+            }
+            let raw = graph::read_node_record(&mut c, records, self.version).ok()?;
+            let node = build_node_in_layer(
+                raw,
+                old_node.layer,
+                &last.graph.labelspaces,
+                &self.source_name,
+            )?;
+            let vertices = last.graph.mesh.as_ref().map(|m| m.points.len());
+            let claims_ok =
+                vertices.is_none_or(|nv| node.mesh_connections.iter().all(|&v| (v as usize) < nv));
+            if node.id != old_node.id || !claims_ok {
+                return None;
+            }
+            nodes.push(node);
+            k += 1;
+        }
+        // The records decoded must end where the unchanged rest resumes.
+        (c.offset().checked_add_signed(-delta)? == bounds[k]).then_some(Redecoded {
+            first,
+            nodes,
+            starts,
+            delta,
+        })
+    }
+}
+
+/// Comparison block: long enough for `memcmp` to run at full speed.
+const BLOCK: usize = 4096;
+
+/// The length of the longest common prefix of `a` and `b`.
+fn common_prefix(a: &[u8], b: &[u8]) -> usize {
+    let n = a.len().min(b.len());
+    let mut i = 0;
+    while i + BLOCK <= n && a[i..i + BLOCK] == b[i..i + BLOCK] {
+        i += BLOCK;
+    }
+    i + a[i..n]
+        .iter()
+        .zip(&b[i..n])
+        .take_while(|(x, y)| x == y)
+        .count()
+}
+
+/// The length of the longest common suffix of `a` and `b`, at most `max`.
+fn common_suffix(a: &[u8], b: &[u8], max: usize) -> usize {
+    let n = a.len().min(b.len()).min(max);
+    let (a, b) = (&a[a.len() - n..], &b[b.len() - n..]);
+    let mut i = 0;
+    while i + BLOCK <= n && a[n - i - BLOCK..n - i] == b[n - i - BLOCK..n - i] {
+        i += BLOCK;
+    }
+    i + a[..n - i]
+        .iter()
+        .rev()
+        .zip(b[..n - i].iter().rev())
+        .take_while(|(x, y)| x == y)
+        .count()
 }
 
 #[cfg(test)]
@@ -180,6 +346,12 @@ mod tests {
         Same,
         /// The body is cut short (a bad body).
         Truncate(usize),
+        /// Node `i % n` gets a name of `len` letters (its record changes length).
+        Rename(usize, usize),
+        /// Node `i % n` is dropped, with its edges.
+        Drop(usize),
+        /// A copy of node `i % n` under a new id is appended.
+        Copy(usize),
     }
 
     fn edit() -> impl Strategy<Value = Edit> {
@@ -190,7 +362,91 @@ mod tests {
             1 => Just(Edit::ToggleMesh),
             1 => Just(Edit::Same),
             1 => any::<usize>().prop_map(Edit::Truncate),
+            2 => (any::<usize>(), 0..40usize).prop_map(|(i, n)| Edit::Rename(i, n)),
+            1 => any::<usize>().prop_map(Edit::Drop),
+            1 => any::<usize>().prop_map(Edit::Copy),
         ]
+    }
+
+    /// Applies an edit that changes the graph itself.
+    fn change(g: &mut DsgGraph, e: &Edit) {
+        let n = g.nodes.len();
+        match *e {
+            Edit::Move(i, d) => g.nodes[i % n].position[0] += d,
+            Edit::Rename(i, len) => {
+                g.nodes[i % n].name = (len > 0).then(|| "r".repeat(len));
+            }
+            Edit::Drop(i) if n > 1 => {
+                let id = g.nodes.remove(i % n).id;
+                g.edges.retain(|x| x.source != id && x.target != id);
+                g.sibling_edges.retain(|x| x.source != id && x.target != id);
+                g.extra_parent_edges
+                    .retain(|x| x.parent != id && x.child != id);
+                for node in &mut g.nodes {
+                    if node.parent == Some(id) {
+                        node.parent = None;
+                    }
+                }
+            }
+            Edit::Copy(i) => {
+                let mut copy = g.nodes[i % n].clone();
+                copy.id = g.nodes.iter().map(|x| x.id).max().unwrap_or(0) + 1;
+                copy.parent = None;
+                g.nodes.push(copy);
+            }
+            _ => {}
+        }
+    }
+
+    /// The graph before a step, from the graph after it and the step.
+    fn previous_graph(step: StreamStep, after: &DsgGraph) -> Option<DsgGraph> {
+        if let Some(changed) = step.changed_nodes {
+            let mut g = after.clone();
+            let end = changed.first + changed.previous.len();
+            g.nodes.splice(changed.first..end, changed.previous);
+            return Some(g);
+        }
+        let mut previous = step.previous?;
+        if step.mesh_reused {
+            previous.mesh = after.mesh.clone();
+        }
+        Some(previous)
+    }
+
+    #[test]
+    fn moves_and_renames_decode_only_the_changed_records() {
+        let mut g = generate(OfficeParams {
+            seed: 4,
+            scale: 0.02,
+        });
+        let mut stream = BodyStream::new(DsgVersion::V1_1_3, "s");
+        stream.decode(to_binary_body(&g).unwrap()).unwrap();
+        let n = g.nodes.len();
+        for e in [
+            Edit::Move(3, 0.5),
+            Edit::Rename(n / 2, 12),
+            Edit::Move(n / 2 + 1, -0.25),
+            Edit::Rename(n / 2, 0),
+            Edit::Move(n - 1, 1.0),
+            Edit::Move(0, 1.0),
+        ] {
+            change(&mut g, &e);
+            let body = to_binary_body(&g).unwrap();
+            let full = parse_binary_body(&body, DsgVersion::V1_1_3, "s").unwrap();
+            let step = stream.decode(body).unwrap();
+            let changed = step.and_then(|s| s.changed_nodes).expect("records decoded");
+            assert_eq!(changed.previous.len(), 1, "{e:?}");
+            assert!(stream.graph() == Some(&full), "{e:?}: not the full decode");
+        }
+        // A node added or dropped changes the record count: decoded in full.
+        for e in [Edit::Copy(2), Edit::Drop(5)] {
+            change(&mut g, &e);
+            let body = to_binary_body(&g).unwrap();
+            let full = parse_binary_body(&body, DsgVersion::V1_1_3, "s").unwrap();
+            let step = stream.decode(body).unwrap();
+            assert!(step.expect("changed").changed_nodes.is_none(), "{e:?}");
+            assert!(stream.graph() == Some(&full), "{e:?}: not the full decode");
+        }
     }
 
     proptest! {
@@ -210,9 +466,8 @@ mod tests {
                 let mut sent = g.clone();
                 let mut body_cut = None;
                 match e {
-                    Edit::Move(i, d) => {
-                        let k = i % g.nodes.len();
-                        g.nodes[k].position[0] += d;
+                    Edit::Move(..) | Edit::Rename(..) | Edit::Drop(_) | Edit::Copy(_) => {
+                        change(&mut g, &e);
                         sent = g.clone();
                     }
                     Edit::MoveVertex(i, d) => {
@@ -255,12 +510,10 @@ mod tests {
                         prop_assert_eq!(stream.graph(), Some(&f));
                         let tail = stream.last.as_ref().map(|l| body[l.tail.clone()].to_vec());
                         prop_assert_eq!(step.mesh_reused, last_tail == tail);
-                        let mut previous = step.previous.expect("not the first body");
-                        if step.mesh_reused {
-                            prop_assert!(previous.mesh.is_none());
-                            previous.mesh = f.mesh.clone();
+                        if step.mesh_reused && let Some(p) = &step.previous {
+                            prop_assert!(p.mesh.is_none());
                         }
-                        prop_assert_eq!(Some(previous), before);
+                        prop_assert_eq!(previous_graph(step, &f), before);
                     }
                     (Err(s), Err(f)) => {
                         prop_assert_eq!(s.to_string(), f.to_string());

@@ -129,7 +129,10 @@ mod tests {
         watch.confirmed(id, details.as_ref());
         assert!(watch.runs(id), "this process runs");
         let (other, _) = own_node("b");
-        assert!(!watch.runs(*other.id()), "another node is not the one watched");
+        assert!(
+            !watch.runs(*other.id()),
+            "another node is not the one watched"
+        );
         watch.forget();
         assert!(!watch.runs(id), "forgotten");
         watch.confirmed(id, None);

@@ -7,11 +7,11 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
+use iceoryx2::node::NodeView as _;
 use iceoryx2::port::ReceiveError as IoxReceiveError;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::node::NodeView as _;
 use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;

@@ -116,10 +116,11 @@ impl Follower {
             });
         };
         let graph = self.stream.graph().expect("decoded above");
-        let moves = step
-            .previous
-            .as_ref()
-            .and_then(|p| patch::plan(p, graph, step.mesh_reused, self.layout));
+        let moves = match (&step.previous, &step.changed_nodes) {
+            (Some(p), _) => patch::plan(p, graph, step.mesh_reused, self.layout),
+            (None, Some(changed)) => patch::plan_changed(changed, graph, self.layout),
+            (None, None) => None,
+        };
         if let Some(moves) = moves {
             let t1 = Instant::now();
             if let Ok(report) = patch::apply(live, &moves) {

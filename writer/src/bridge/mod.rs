@@ -9,7 +9,8 @@
 //!
 //! Most of each message is what the last one held, so [`follow`] does not redo it: a
 //! message equal to the last byte for byte is dropped, an unchanged mesh section is
-//! compared rather than decoded ([`ygg_dsg::BodyStream`]), and a message in which nodes
+//! compared rather than decoded, when only some node records changed only those are
+//! decoded ([`ygg_dsg::BodyStream`]), and a message in which nodes
 //! only moved becomes those nodes' mutations without building the layout ([`patch`]);
 //! anything else takes the general path above. Each `update` line names the `path` taken.
 //!

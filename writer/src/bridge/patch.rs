@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use std::hash::BuildHasher;
 
 use ygg_dsg::layout::Layout;
-use ygg_dsg::{DsgGraph, DsgNode, NodeKind};
+use ygg_dsg::{ChangedNodes, DsgGraph, DsgNode, NodeKind};
 use ygg_store::{EditResult, FeatureValue, NodeId, SceneGraph, SceneView, SyncReport};
 
 /// Parent hops the layout follows from an object to find its room.
@@ -69,10 +69,34 @@ pub(super) fn plan(
     if !same_rest {
         return None;
     }
+    node_moves(previous.nodes.iter().zip(&next.nodes), next, layout)
+}
+
+/// [`plan`] for a message in which only the nodes `changed` names differ from the
+/// previous graph (the stream decoded only their records: the mesh, layers, edges and
+/// every other node are byte for byte the previous message's).
+pub(super) fn plan_changed(
+    changed: &ChangedNodes,
+    next: &DsgGraph,
+    layout: Layout,
+) -> Option<Vec<Move>> {
+    let now = next
+        .nodes
+        .get(changed.first..changed.first + changed.previous.len())?;
+    node_moves(changed.previous.iter().zip(now), next, layout)
+}
+
+/// The moves taking each node of `pairs` (previous, next) to its new value, when every
+/// difference is a move the layout answers node by node (the module docs); `None` else.
+fn node_moves<'a>(
+    pairs: impl Iterator<Item = (&'a DsgNode, &'a DsgNode)>,
+    next: &DsgGraph,
+    layout: Layout,
+) -> Option<Vec<Move>> {
     let vertices = next.mesh.as_ref().map_or(0, |m| m.points.len());
     let mut index = None;
     let mut moves = Vec::new();
-    for (a, b) in previous.nodes.iter().zip(&next.nodes) {
+    for (a, b) in pairs {
         if same_node(a, b) {
             continue;
         }
