@@ -599,3 +599,47 @@ fn bad_snapshot_and_query_files_are_clear_errors() {
     let o = run("ygg-reader", &[&"inspect", &ygg, &"--layouts", &"mint"]);
     assert_fails(&o, &["--layouts"]);
 }
+
+#[test]
+fn serve_splits_the_office_into_rooms_or_says_why_not() {
+    let scene = TestScene::new("cli-rooms");
+    let o = scene
+        .command(
+            "ygg-writer",
+            &[
+                "serve",
+                "--scene",
+                &scene.name,
+                "--rooms",
+                "3",
+                "--rate",
+                "0",
+            ],
+        )
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn");
+    assert_fails(&o, &["--rooms 3"]);
+    let o = scene
+        .command(
+            "ygg-writer",
+            &[
+                "serve",
+                "--scene",
+                &scene.name,
+                "--rooms",
+                "20",
+                "--rate",
+                "0",
+                "--seconds",
+                "0.3",
+            ],
+        )
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn");
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let ready = text(&o.stdout);
+    assert!(ready.contains("\"event\":\"ready\""), "{ready}");
+    scene.assert_no_leftovers(Duration::from_secs(10));
+}

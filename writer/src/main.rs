@@ -73,6 +73,10 @@ struct Serve {
     /// Layout of the built-in office (vanilla, chocolate, mint, saffron).
     #[arg(long, default_value = "mint")]
     layout: ygg_dsg::layout::Layout,
+    /// Split the built-in office into this many rooms (at least its own 9; 103 gives the
+    /// 418-layer building of `ygg-bench ipc`): a scene with many layers.
+    #[arg(long, conflicts_with = "file")]
+    rooms: Option<usize>,
     /// Update ticks per second (agent poses, object moves, mesh growth); 0 serves the
     /// scene unchanged.
     #[arg(long, default_value_t = 30.0)]
@@ -259,10 +263,14 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
             ygg_store::query::subgraph(&view, &all)
         }
         None => {
-            let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
+            let mut dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
                 seed: 7,
                 scale: args.scale,
             });
+            if let Some(rooms) = args.rooms {
+                dsg = ygg_dsg::office::split_rooms(&dsg, rooms)
+                    .map_err(|e| format!("--rooms {rooms}: {e}"))?;
+            }
             ygg_dsg::layout::build(&dsg, args.layout)?
         }
     };
