@@ -603,41 +603,17 @@ fn bad_snapshot_and_query_files_are_clear_errors() {
 #[test]
 fn serve_splits_the_office_into_rooms_or_says_why_not() {
     let scene = TestScene::new("cli-rooms");
-    let o = scene
-        .command(
-            "ygg-writer",
-            &[
-                "serve",
-                "--scene",
-                &scene.name,
-                "--rooms",
-                "3",
-                "--rate",
-                "0",
-            ],
-        )
-        .stdin(Stdio::null())
-        .output()
-        .expect("spawn");
-    assert_fails(&o, &["--rooms 3"]);
-    let o = scene
-        .command(
-            "ygg-writer",
-            &[
-                "serve",
-                "--scene",
-                &scene.name,
-                "--rooms",
-                "20",
-                "--rate",
-                "0",
-                "--seconds",
-                "0.3",
-            ],
-        )
-        .stdin(Stdio::null())
-        .output()
-        .expect("spawn");
+    let serve = |extra: &[&str]| {
+        let mut args = vec!["serve", "--scene", &scene.name, "--rate", "0"];
+        args.extend_from_slice(extra);
+        scene
+            .command("ygg-writer", &args)
+            .stdin(Stdio::null())
+            .output()
+            .expect("spawn")
+    };
+    assert_fails(&serve(&["--rooms", "3"]), &["--rooms 3"]);
+    let o = serve(&["--rooms", "20", "--seconds", "0.3"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let ready = text(&o.stdout);
     assert!(ready.contains("\"event\":\"ready\""), "{ready}");
