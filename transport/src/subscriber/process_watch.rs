@@ -10,9 +10,10 @@
 //! on the node's process (Linux 5.3 or later) and later checks only that: a poll that does
 //! not wait tells whether the process has exited. iceoryx2 stays the authority: a process
 //! that exited, a different node, and every [`CONFIRM_INTERVAL`] go through its check again.
-//! The pidfd is kept only when the process's executable name matches the node's details,
-//! so a node of another pid namespace (whose pid means another process here) never gets
-//! one and is always checked the iceoryx2 way.
+//! The pidfd is kept only when the process's executable matches the node's details, so a
+//! node of another pid namespace (whose pid means another process here) gets none (unless
+//! that process runs the same program, which the periodic confirmation settles) and is
+//! checked the iceoryx2 way.
 
 use std::os::fd::OwnedFd;
 use std::time::{Duration, Instant};
@@ -79,21 +80,18 @@ impl ProcessWatch {
     }
 }
 
-/// A pidfd on the process `details` names, if a process with that pid runs here under the
-/// executable name the details give.
+/// A pidfd on the process `details` names, if a process with that pid runs here from the
+/// executable the details give (iceoryx2 records the file name of `/proc/self/exe`).
 fn open_matching(details: &NodeDetails) -> Option<OwnedFd> {
     let pid = Pid::from_raw(details.process_id().value())?;
     let pidfd = pidfd_open(pid, PidfdFlags::empty()).ok()?;
-    // Read after the pidfd is open: if the pid was reused in between, the name read is the
-    // new process's, and a match then means the same executable under the same pid, which
-    // the periodic confirmation settles.
-    let comm = std::fs::read(format!("/proc/{}/comm", pid.as_raw_nonzero())).ok()?;
-    let comm = comm.strip_suffix(b"\n").unwrap_or(&comm);
-    let executable = details.executable().as_bytes();
-    // The kernel keeps the first 15 bytes of the name.
-    let same = !comm.is_empty() && executable.starts_with(comm) && {
-        comm.len() == executable.len() || comm.len() == 15
-    };
+    // Read after the pidfd is open: if the pid was reused in between, the executable read
+    // is the new process's, and a match then means the same program under the same pid,
+    // which the periodic confirmation settles.
+    let exe = std::fs::read_link(format!("/proc/{}/exe", pid.as_raw_nonzero())).ok()?;
+    let same = exe
+        .file_name()
+        .is_some_and(|name| name.as_encoded_bytes() == details.executable().as_bytes());
     same.then_some(pidfd)
 }
 
