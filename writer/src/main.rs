@@ -73,8 +73,9 @@ struct Serve {
     /// Layout of the built-in office (vanilla, chocolate, mint, saffron).
     #[arg(long, default_value = "mint")]
     layout: ygg_dsg::layout::Layout,
-    /// Split the built-in office into this many rooms (at least its own 9; 103 gives the
-    /// 418-layer building of `ygg-bench ipc`): a scene with many layers.
+    /// Split the built-in office into this many rooms (at least as many as it has, 9 at
+    /// scale 1; 103 gives the 418-layer building of `ygg-bench ipc`): a scene with many
+    /// layers.
     #[arg(long, conflicts_with = "file")]
     rooms: Option<usize>,
     /// Update ticks per second (agent poses, object moves, mesh growth); 0 serves the

@@ -29,7 +29,7 @@ use super::graph::{self, NodeRecords};
 use super::reader::Cursor;
 use crate::error::DsgImportError;
 use crate::json::{build_graph, build_node_in_layer};
-use crate::model::{DsgGraph, DsgNode, DsgVersion};
+use crate::model::{DsgGraph, DsgMesh, DsgNode, DsgVersion};
 use crate::report::ImportOptions;
 
 /// A decoder for successive header-less bodies of one stream (Spark-DSG's ZMQ messages,
@@ -140,17 +140,23 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
     /// As [`parse_binary_body`](super::parse_binary_body); the stream then keeps its
     /// last graph.
     pub fn decode(&mut self, body: B) -> Result<Option<StreamStep>, DsgImportError> {
-        if self
+        // One comparison from each end of the two bodies serves every reuse below.
+        let overlap = self
             .last
             .as_ref()
-            .is_some_and(|l| l.body.as_ref() == body.as_ref())
+            .map(|l| Overlap::of(l.body.as_ref(), body.as_ref()));
+        if let (Some(l), Some(o)) = (&self.last, overlap)
+            && o.is_whole(l.body.as_ref(), body.as_ref())
         {
             return Ok(None);
         }
         super::check_version(self.version, &self.source_name)?;
-        let body = match self.replace_changed_records(body) {
-            Ok(step) => return Ok(Some(step)),
-            Err(body) => body,
+        let body = match overlap {
+            Some(o) => match self.replace_changed_records(body, o) {
+                Ok(step) => return Ok(Some(step)),
+                Err(body) => body,
+            },
+            None => body,
         };
         let bytes = body.as_ref();
         let c = &mut Cursor::new(bytes, 0);
@@ -158,21 +164,18 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         let (raw, records) =
             graph::read_graph_indexed(c, self.version, &mut |_| {}).map_err(err)?;
         let tail = c.position()..bytes.len();
+        // The tails are equal when they have one length and the common suffix covers it
+        // (the suffix stops short of the common prefix only inside a differing tail).
         let same_tail = self
             .last
             .as_ref()
-            .is_some_and(|l| l.body.as_ref()[l.tail.clone()] == bytes[tail.clone()]);
+            .zip(overlap)
+            .is_some_and(|(l, o)| l.tail.len() == tail.len() && o.suffix >= tail.len());
         let build = |raw| build_graph(raw, &self.source_name, ImportOptions::STRICT, &mut |_| {});
         let (graph, mesh_reused) = if same_tail {
             let mut graph = build(raw)?.graph;
             let last_mesh = self.last.as_ref().and_then(|l| l.graph.mesh.as_ref());
-            let vertices = last_mesh.map_or(0, |m| m.points.len());
-            let connected = last_mesh.is_none()
-                || graph
-                    .nodes
-                    .iter()
-                    .all(|n| n.mesh_connections.iter().all(|&v| (v as usize) < vertices));
-            if connected {
+            if graph.nodes.iter().all(|n| claims_within(n, last_mesh)) {
                 graph.mesh = self.last.as_mut().and_then(|l| l.graph.mesh.take());
                 (graph, true)
             } else {
@@ -204,8 +207,8 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
     /// The step for `body` when only node records changed (see the module docs), applied
     /// to the last graph; `Err(body)` when that does not hold and the body must be
     /// decoded in full.
-    fn replace_changed_records(&mut self, body: B) -> Result<StreamStep, B> {
-        let Some(r) = self.redecode_changed_records(body.as_ref()) else {
+    fn replace_changed_records(&mut self, body: B, overlap: Overlap) -> Result<StreamStep, B> {
+        let Some(r) = self.redecode_changed_records(body.as_ref(), overlap) else {
             return Err(body);
         };
         let last = self.last.as_mut().expect("a last body was compared");
@@ -236,7 +239,7 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
 
     /// Decodes again the node records of `new` that differ from the last body's, when
     /// nothing else differs and each keeps its node's id and layer; `None` otherwise.
-    fn redecode_changed_records(&self, new: &[u8]) -> Option<Redecoded> {
+    fn redecode_changed_records(&self, new: &[u8], overlap: Overlap) -> Option<Redecoded> {
         let last = self.last.as_ref()?;
         let records = last.records.as_ref()?;
         let old = last.body.as_ref();
@@ -245,12 +248,8 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         if last.graph.nodes.len() != n {
             return None;
         }
-        let prefix = common_prefix(old, new);
-        if prefix < bounds[0] {
-            return None;
-        }
-        let suffix = common_suffix(old, new, old.len().min(new.len()) - prefix);
-        if old.len() - suffix > bounds[n] {
+        let Overlap { prefix, suffix } = overlap;
+        if prefix < bounds[0] || old.len() - suffix > bounds[n] {
             return None;
         }
         // The record holding the first byte that differs.
@@ -259,6 +258,7 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         let unchanged_from = new.len() - suffix;
         let mut c = Cursor::new(new.get(bounds[first]..)?, bounds[first]);
         let (mut nodes, mut starts) = (Vec::new(), Vec::new());
+        let mesh = last.graph.mesh.as_ref();
         let mut k = first;
         while k == first || c.offset() < unchanged_from {
             let old_node = last.graph.nodes.get(k)?;
@@ -272,10 +272,7 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
                 &last.graph.labelspaces,
                 &self.source_name,
             )?;
-            let vertices = last.graph.mesh.as_ref().map(|m| m.points.len());
-            let claims_ok =
-                vertices.is_none_or(|nv| node.mesh_connections.iter().all(|&v| (v as usize) < nv));
-            if node.id != old_node.id || !claims_ok {
+            if node.id != old_node.id || !claims_within(&node, mesh) {
                 return None;
             }
             nodes.push(node);
@@ -288,6 +285,37 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
             starts,
             delta,
         })
+    }
+}
+
+/// Whether every vertex `node` claims is one of `mesh`'s (any claim, without a mesh: the
+/// full decode checks claims only against a mesh).
+fn claims_within(node: &DsgNode, mesh: Option<&DsgMesh>) -> bool {
+    mesh.is_none_or(|m| {
+        node.mesh_connections
+            .iter()
+            .all(|&v| (v as usize) < m.points.len())
+    })
+}
+
+/// How two bodies agree: the length of their common prefix, and of their common suffix
+/// short of it.
+#[derive(Clone, Copy)]
+struct Overlap {
+    prefix: usize,
+    suffix: usize,
+}
+
+impl Overlap {
+    fn of(old: &[u8], new: &[u8]) -> Self {
+        let prefix = common_prefix(old, new);
+        let suffix = common_suffix(old, new, old.len().min(new.len()) - prefix);
+        Self { prefix, suffix }
+    }
+
+    /// Whether `old` and `new` are the same bytes.
+    fn is_whole(self, old: &[u8], new: &[u8]) -> bool {
+        self.prefix == old.len() && self.prefix == new.len()
     }
 }
 

@@ -25,7 +25,7 @@ use rustix::event::{PollFd, PollFlags, Timespec, poll};
 use rustix::process::{Pid, PidfdFlags, pidfd_open};
 
 /// How long a pidfd's answer stands before iceoryx2's check confirms the node again.
-pub(super) const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);
+const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);
 
 /// The writer node's process, watched through a pidfd.
 #[derive(Debug, Default)]
