@@ -16,9 +16,9 @@
 //! hydra-reader`: a new validated snapshot is visible), then N Python processes each
 //! with a `DsgReceiver`'s socket doing exactly what `DsgReceiver.recv` does
 //! (`update_from_binary` of every message). Measured per message: send → visible in the
-//! first and in the last consumer; CPU seconds of all consumers together (from
-//! `/proc/PID/stat`; on our side the bridge counts as a consumer); spark_dsg's
-//! `update_from_binary` time. Also the binary file import against spark_dsg's `load`.
+//! first and in the last consumer; CPU seconds of all consumers together (from each
+//! thread's `/proc/PID/task/TID/schedstat`; on our side the bridge counts as a
+//! consumer); spark_dsg's `update_from_binary` time. Also the binary file import against spark_dsg's `load`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -101,15 +101,20 @@ fn now_ns() -> u64 {
     t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
 }
 
-/// CPU seconds (user + system) of process `pid` so far.
+/// CPU seconds of process `pid` so far: the time its threads spent on a CPU, in
+/// nanoseconds from each thread's `/proc/PID/task/TID/schedstat` (`/proc/PID/stat`
+/// counts 10 ms ticks, too coarse for a one-object edit). Every consumer here keeps its
+/// threads for its whole life, so no exited thread's time is missed.
 fn cpu_seconds(pid: u32) -> f64 {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    // Fields after the parenthesised command name: state is field 3; utime 14, stime 15.
-    let rest = stat.rsplit_once(')').map_or("", |r| r.1);
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i).and_then(|s| s.parse::<f64>().ok()).unwrap_or(0.0);
-    // Linux reports these in USER_HZ, which is 100 on every architecture it supports.
-    (ticks(11) + ticks(12)) / 100.0
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return 0.0;
+    };
+    let on_cpu_ns = |task: std::fs::DirEntry| {
+        let stat = std::fs::read_to_string(task.path().join("schedstat")).ok()?;
+        stat.split_whitespace().next()?.parse::<u64>().ok()
+    };
+    let ns: u64 = tasks.flatten().filter_map(on_cpu_ns).sum();
+    ns as f64 / 1e9
 }
 
 /// `ygg-bench hydra-reader`: prints `{"t_ns":..,"generation":..,"nodes":..}` each time a
@@ -121,7 +126,8 @@ pub fn run_reader(args: &HydraReaderArgs) -> Result<(), Box<dyn std::error::Erro
         .open()?;
     println!("ready");
     while !reader.termination_requested() {
-        if let Some(s) = reader.wait_next(Duration::from_millis(100))? {
+        // A long wait: SIGTERM ends it at once, and every wake-up costs CPU counted here.
+        if let Some(s) = reader.wait_next(Duration::from_secs(1))? {
             let nodes = ygg_store::SceneView::node_count(&s.view());
             println!(
                 "{}",
@@ -220,9 +226,8 @@ struct Measured {
     cpu: Vec<f64>,
     /// spark_dsg's `update_from_binary` seconds (one per receiver and message).
     update: Vec<f64>,
-    /// CPU seconds of all consumers over the whole batch, per message (a mean: finer
-    /// than one message's 10 ms ticks; for the full office it includes the one-room
-    /// graphs between).
+    /// CPU seconds of all consumers over the whole batch, per message (a mean; for the
+    /// full office it includes the one-room graphs between).
     cpu_mean: f64,
     /// [`Measured::cpu_mean`] split by process, in the order of the pids measured.
     cpu_mean_per_process: Vec<f64>,
@@ -521,8 +526,8 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
          Send → visible: from just before the sender's socket send to a new validated \
          snapshot in a reader (ours) or the end of `update_from_binary` (spark_dsg); first \
          and last of the N consumers. CPU: user + system seconds per message of all \
-         consumers together (ours: the bridge + N readers; spark_dsg: N receivers), from \
-         `/proc/PID/stat` (10 ms ticks). The two sides run one after the other on the same \
+         consumers together (ours: the bridge + N readers; spark_dsg: N receivers), the time \
+         on a CPU of each of their threads (`/proc/PID/task/TID/schedstat`). The two sides run one after the other on the same \
          sender, never at once.\n",
         args.scale, args.layout, args.messages, args.edits
     )?;

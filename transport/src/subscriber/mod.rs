@@ -8,6 +8,7 @@ mod segment;
 pub(crate) use segment::HeldSegment;
 mod segment_subscriber;
 mod snapshot;
+mod wake;
 
 pub use error::{ReaderOpenError, ReceiveError};
 pub use segment_subscriber::{SegmentSubscriber, SubscriberBuilder, WriterStatus};

@@ -15,7 +15,7 @@
 //! that process runs the same program, which the periodic confirmation settles) and is
 //! checked the iceoryx2 way.
 
-use std::os::fd::OwnedFd;
+use std::os::fd::{AsFd as _, BorrowedFd, OwnedFd};
 use std::time::{Duration, Instant};
 
 use iceoryx2::identifiers::UniqueNodeId;
@@ -38,22 +38,42 @@ struct Watched {
     node: UniqueNodeId,
     pidfd: OwnedFd,
     confirmed: Instant,
+    /// The pidfd has polled readable: the process has exited.
+    exited: bool,
 }
 
 impl ProcessWatch {
     /// Whether `node`'s process is known to run without asking iceoryx2: it is the node
     /// watched, its process has not exited, and iceoryx2 confirmed it alive less than
     /// [`CONFIRM_INTERVAL`] ago. `false` means "ask iceoryx2", not "dead".
-    pub(super) fn runs(&self, node: UniqueNodeId) -> bool {
-        let Some(w) = &self.watched else {
+    pub(super) fn runs(&mut self, node: UniqueNodeId) -> bool {
+        let Some(w) = &mut self.watched else {
             return false;
         };
-        if w.node != node || w.confirmed.elapsed() >= CONFIRM_INTERVAL {
+        if w.node != node || w.exited || w.confirmed.elapsed() >= CONFIRM_INTERVAL {
             return false;
         }
         let mut fds = [PollFd::new(&w.pidfd, PollFlags::IN)];
         // A pidfd polls readable once its process has exited.
-        matches!(poll(&mut fds, Some(&Timespec::default())), Ok(0))
+        w.exited = !matches!(poll(&mut fds, Some(&Timespec::default())), Ok(0));
+        !w.exited
+    }
+
+    /// The pidfd to wait on beside the writer's events: it polls readable when the
+    /// watched process exits. `None` when nothing is watched or the process is known to
+    /// have exited (waiting on it would return at once).
+    pub(super) fn exit_fd(&self) -> Option<BorrowedFd<'_>> {
+        self.watched
+            .as_ref()
+            .filter(|w| !w.exited)
+            .map(|w| w.pidfd.as_fd())
+    }
+
+    /// When iceoryx2 must confirm the watched node again; `None` when nothing is watched.
+    pub(super) fn confirm_due(&self) -> Option<Instant> {
+        self.watched
+            .as_ref()
+            .map(|w| w.confirmed + CONFIRM_INTERVAL)
     }
 
     /// iceoryx2 found `node` alive, with these details: watch its process from now on.
@@ -70,6 +90,7 @@ impl ProcessWatch {
                 node,
                 pidfd,
                 confirmed: Instant::now(),
+                exited: false,
             })
         });
     }
@@ -146,17 +167,28 @@ mod tests {
             .spawn()
             .expect("sleep");
         let pid = Pid::from_raw(child.id().cast_signed()).expect("pid");
-        let watch = ProcessWatch {
+        let mut watch = ProcessWatch {
             watched: Some(Watched {
                 node: id,
                 pidfd: pidfd_open(pid, PidfdFlags::empty()).expect("pidfd"),
                 confirmed: Instant::now(),
+                exited: false,
             }),
         };
         assert!(watch.runs(id), "the child runs");
+        assert!(watch.exit_fd().is_some(), "its exit can be waited for");
         child.kill().expect("kill");
         child.wait().expect("reap");
         assert!(!watch.runs(id), "the child exited");
+        assert!(
+            watch.exit_fd().is_none(),
+            "an exit already seen is not waited for"
+        );
+        watch.confirmed(id, None);
+        assert!(
+            !watch.runs(id),
+            "a confirmation does not revive an exited process"
+        );
     }
 
     #[test]

@@ -9,7 +9,7 @@ use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::node::NodeView as _;
 use iceoryx2::port::ReceiveError as IoxReceiveError;
-use iceoryx2::port::listener::{Listener, ListenerWaitError};
+use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
@@ -24,6 +24,7 @@ use super::assembly::Assembly;
 use super::process_watch::ProcessWatch;
 use super::segment::HeldSegment;
 use super::snapshot::Snapshot;
+use super::wake;
 use super::{ReaderOpenError, ReceiveError};
 use crate::SetupError;
 use crate::protocol::{
@@ -99,7 +100,9 @@ impl SubscriberBuilder {
     }
 
     /// How often a waiting reader checks that the writer process is alive (default 200 ms).
-    /// A writer that exits cleanly is noticed at once; a killed one within this interval.
+    /// A writer that exits cleanly is noticed at once, and so is a killed one whose process
+    /// the reader can watch (same pid namespace, Linux 5.3+); another killed one within
+    /// this interval.
     pub fn liveness_interval(mut self, value: Duration) -> Self {
         self.liveness_interval = value.max(Duration::from_millis(1));
         self
@@ -306,8 +309,9 @@ impl SegmentSubscriber {
     }
 
     /// Blocks until a snapshot newer than the last one returned is complete, or `timeout`
-    /// passes (`Ok(None)`). Wakes on iceoryx2 events; between events it only checks, every
-    /// liveness interval, that the writer lives.
+    /// passes (`Ok(None)`). Wakes on iceoryx2 events and, when the writer's process can be
+    /// watched (a Linux pidfd), on its exit; otherwise it checks every liveness interval
+    /// that the writer lives.
     ///
     /// # Errors
     ///
@@ -340,21 +344,18 @@ impl SegmentSubscriber {
                 return Ok(None);
             }
             let until_check = self.next_liveness_check.saturating_duration_since(now);
+            // While a catch-up burst is awaited, wake to ask again if it does not come.
+            let until_retry = self.catch_up_asked.map_or(Duration::MAX, |at| {
+                CATCH_UP_RETRY.saturating_sub(at.elapsed())
+            });
             let slice = (timeout - elapsed)
                 .min(until_check)
+                .min(until_retry)
                 .max(Duration::from_micros(100));
             let mut writer_gone = false;
-            match self
-                .events
-                .timed_wait(|e| writer_gone |= e.id == EVENT_WRITER_GONE, slice)
-            {
-                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
-                Err(e) => {
-                    return Err(ReceiveError::Wait {
-                        reason: e.to_string(),
-                    });
-                }
-            }
+            let exited = wake::wait(&self.events, self.writer_process.exit_fd(), slice, |id| {
+                writer_gone |= id == EVENT_WRITER_GONE
+            })?;
             if self.termination_requested() {
                 return Err(ReceiveError::Terminated);
             }
@@ -364,6 +365,8 @@ impl SegmentSubscriber {
                 let now = Instant::now();
                 self.fast_checks_until = Some(now + FAST_CHECK_WINDOW);
                 self.next_liveness_check = now;
+            } else if exited {
+                self.next_liveness_check = Instant::now();
             }
         }
     }
@@ -444,6 +447,13 @@ impl SegmentSubscriber {
             (true, _) => {
                 self.status = WriterStatus::Alive;
                 self.fast_checks_until = None;
+                // The exit of a watched process wakes the wait (see `wake`): until then only
+                // iceoryx2's periodic confirmation is due.
+                if self.writer_process.exit_fd().is_some()
+                    && let Some(due) = self.writer_process.confirm_due()
+                {
+                    self.next_liveness_check = self.next_liveness_check.max(due);
+                }
             }
             (false, WriterStatus::Gone) => {}
             (false, _) => {

@@ -1,0 +1,137 @@
+//! One wait for the writer's events and, beside them, the exit of the writer's process.
+//!
+//! iceoryx2's `Listener::timed_wait` can only wait for events, so a reader that must also
+//! notice a killed writer (which sends none) used to wake every liveness interval to ask.
+//! Polling the listener's socket together with the pidfd of the writer's process
+//! ([`ProcessWatch`](super::process_watch::ProcessWatch)) wakes the reader when either has
+//! something, and otherwise not at all: an idle reader no longer spends CPU on periodic
+//! wake-ups, and a killed writer is noticed at once instead of within the interval.
+
+#![allow(
+    unsafe_code,
+    reason = "the listener's descriptor is only reachable through iceoryx2's unsafe accessor"
+)]
+
+use std::os::fd::BorrowedFd;
+use std::time::Duration;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::prelude::EventId;
+use iceoryx2_bb_posix::file_descriptor::FileDescriptorBased as _;
+use rustix::event::{PollFd, PollFlags, Timespec, poll};
+use rustix::io::Errno;
+
+use super::ReceiveError;
+use crate::protocol::Ipc;
+
+/// Waits up to `timeout` until `listener` has events or the process behind `exit_fd` (a
+/// pidfd) exits or a signal arrives, then hands every event that arrived to `on_event`
+/// without blocking. Returns whether the process behind `exit_fd` has exited.
+///
+/// # Errors
+/// [`ReceiveError::Wait`] when polling or collecting the events fails.
+pub(super) fn wait(
+    listener: &Listener<Ipc>,
+    exit_fd: Option<BorrowedFd<'_>>,
+    timeout: Duration,
+    on_event: impl FnMut(EventId),
+) -> Result<bool, ReceiveError> {
+    let failed = |reason: String| ReceiveError::Wait { reason };
+    let listener_fd = descriptor(listener);
+    let mut fds = [
+        PollFd::from_borrowed_fd(listener_fd, PollFlags::IN),
+        PollFd::from_borrowed_fd(exit_fd.unwrap_or(listener_fd), PollFlags::IN),
+    ];
+    let polled = if exit_fd.is_some() { 2 } else { 1 };
+    let timeout = Timespec {
+        tv_sec: i64::try_from(timeout.as_secs()).unwrap_or(i64::MAX),
+        tv_nsec: i64::from(timeout.subsec_nanos()),
+    };
+    let exited = match poll(&mut fds[..polled], Some(&timeout)) {
+        Ok(_) => polled == 2 && !fds[1].revents().is_empty(),
+        // A signal: the caller looks at what it asks for.
+        Err(Errno::INTR) => false,
+        Err(e) => return Err(failed(format!("poll of the event socket: {e}"))),
+    };
+    let mut on_event = on_event;
+    listener
+        .try_wait(|activation| on_event(activation.id))
+        .map_err(|e| failed(e.to_string()))?;
+    Ok(exited)
+}
+
+/// The descriptor of `listener`'s event socket, borrowed for as long as the listener.
+fn descriptor(listener: &Listener<Ipc>) -> BorrowedFd<'_> {
+    // SAFETY: `native_handle` asks that the value is neither kept beyond the descriptor's
+    // life nor closed. The descriptor belongs to the listener's socket, which is open for
+    // the listener's whole life (iceoryx2: "the file descriptor and its reference never
+    // change during the lifetime of the listener port"); the `BorrowedFd` is tied to the
+    // borrow of `listener`, and nothing here closes it.
+    unsafe { BorrowedFd::borrow_raw(listener.file_descriptor().native_handle()) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::iceoryx_config;
+    use iceoryx2::prelude::*;
+    use rustix::process::{Pid, PidfdFlags, pidfd_open};
+    use std::os::fd::AsFd as _;
+    use std::time::Instant;
+
+    fn node(tag: &str) -> Node<Ipc> {
+        let prefix = format!("ygg_wk_{tag}_{}_", std::process::id());
+        let config = iceoryx_config(Some(&prefix)).expect("config");
+        NodeBuilder::new()
+            .config(&config)
+            .create::<Ipc>()
+            .expect("node")
+    }
+
+    #[test]
+    fn wakes_for_an_event_for_an_exit_and_otherwise_times_out() {
+        let node = node("a");
+        let service = node
+            .service_builder(&"ygg_wk_events".try_into().expect("name"))
+            .event()
+            .open_or_create()
+            .expect("event service");
+        let listener = service.listener_builder().create().expect("listener");
+        let notifier = service.notifier_builder().create().expect("notifier");
+
+        let start = Instant::now();
+        let exited = wait(&listener, None, Duration::from_millis(50), |_| {}).expect("wait");
+        assert!(!exited);
+        assert!(
+            start.elapsed() >= Duration::from_millis(45),
+            "timed out early"
+        );
+
+        notifier
+            .notify_with_custom_event_id(EventId::new(3))
+            .expect("notify");
+        let mut ids = Vec::new();
+        let exited =
+            wait(&listener, None, Duration::from_secs(10), |id| ids.push(id)).expect("wait");
+        assert!(!exited);
+        assert_eq!(ids, [EventId::new(3)]);
+
+        let mut child = std::process::Command::new("sleep")
+            .arg("0.2")
+            .spawn()
+            .expect("sleep");
+        let pid = Pid::from_raw(child.id().cast_signed()).expect("pid");
+        let pidfd = pidfd_open(pid, PidfdFlags::empty()).expect("pidfd");
+        let start = Instant::now();
+        let exited = wait(
+            &listener,
+            Some(pidfd.as_fd()),
+            Duration::from_secs(10),
+            |_| {},
+        )
+        .expect("wait");
+        assert!(exited, "the child's exit ends the wait");
+        assert!(start.elapsed() < Duration::from_secs(5));
+        child.wait().expect("reap");
+    }
+}
