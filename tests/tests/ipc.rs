@@ -233,6 +233,43 @@ fn a_sigkilled_reader_does_not_stop_the_writer() {
 }
 
 #[test]
+fn a_sigkilled_readers_slot_is_freed_at_once() {
+    let scene = TestScene::new("slot");
+    let dog = Watchdog::new(WATCHDOG);
+    // iceoryx2 is asked about readers once an hour: only the watch of the reader's process
+    // can free its slot in time.
+    let mut writer = publisher(&scene)
+        .max_readers(1)
+        .liveness_interval(Duration::from_secs(3600))
+        .create()
+        .expect("writer");
+    scene_reader_ready(&scene, &mut writer);
+    let mut victim = scene.spawn_reader("watch", &["--hold-ms", "60000"], &dog);
+    victim.expect_line(STEP, is_snapshot);
+    subscriber(&scene)
+        .open()
+        .expect_err("the one reader slot is taken");
+    victim.signal(Signal::KILL);
+    let _ = victim.wait_exit(STEP);
+    let killed = Instant::now();
+    let reader = loop {
+        match subscriber(&scene).open() {
+            Ok(reader) => break reader,
+            Err(e) if killed.elapsed() > STEP => panic!("the slot was never freed: {e}"),
+            Err(_) => std::thread::sleep(Duration::from_millis(10)),
+        }
+    };
+    let freed = killed.elapsed();
+    // About 50 ms here; iceoryx2's periodic check alone would take up to an hour.
+    assert!(
+        freed < Duration::from_millis(500),
+        "slot freed {freed:?} after the kill"
+    );
+    drop((reader, writer));
+    scene.assert_no_leftovers(STEP);
+}
+
+#[test]
 fn a_sigkilled_writer_is_reported_and_a_restarted_one_is_picked_up() {
     let scene = TestScene::new("wkill");
     let dog = Watchdog::new(WATCHDOG);

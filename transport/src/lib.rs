@@ -66,6 +66,7 @@
 #![warn(missing_docs)]
 
 pub mod limits;
+mod process_watch;
 pub mod protocol;
 mod publisher;
 pub use publisher::shm;
@@ -73,6 +74,7 @@ mod service;
 pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
 pub mod test_pattern;
+mod wake;
 
 #[doc(inline)]
 pub use protocol::ManifestEntry;

@@ -108,7 +108,9 @@ impl SceneWriterBuilder {
         self
     }
 
-    /// How often the writer's helper thread checks readers for liveness (default 200 ms).
+    /// How often the writer's helper thread asks iceoryx2 whether a reader it cannot watch
+    /// through a pidfd (another pid namespace) is alive (default 200 ms); the exit of any
+    /// other reader wakes it at once.
     pub fn liveness_interval(mut self, value: Duration) -> Self {
         self.publisher = self.publisher.liveness_interval(value);
         self

@@ -15,60 +15,70 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::port::listener::Listener;
-use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
 
+use super::reader_watch::ReaderWatch;
 use super::segment_publisher::{Inner, lock};
 use crate::protocol::{EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, Ipc};
+use crate::wake;
 
-/// How often the helper thread removes resources of dead readers.
-const CLEANUP_INTERVAL: Duration = Duration::from_secs(1);
+/// How long the helper sleeps when no reader is connected (a new one announces itself).
+const NO_READER_CHECK: Duration = Duration::from_secs(5);
 
 /// What the helper thread owns.
 pub(crate) struct Helper {
     pub(crate) listener: Listener<Ipc>,
     pub(crate) shm_dir: PathBuf,
+    /// How often readers whose process cannot be watched are checked.
     pub(crate) interval: Duration,
     pub(crate) config: Config,
 }
 
 impl Helper {
     /// Answers reader announcements, removes resources of dead readers and drops connections
-    /// of departed ones until `stop` is set.
+    /// of departed ones until `stop` is set. Sleeps until an announcement, a reader's
+    /// process exits, or a check of the readers is due ([`ReaderWatch`]).
     pub(crate) fn run(self, inner: &Mutex<Inner>, stop: &AtomicBool) {
-        let mut last_cleanup = Instant::now();
+        let mut readers = ReaderWatch::default();
+        let mut next_check = Instant::now();
         let mut readers_before = lock(inner).reader_count();
         while !stop.load(Ordering::SeqCst) {
             let mut hello = false;
-            let waited = self.listener.timed_wait(
-                |activation| hello |= activation.id == EVENT_READER_HELLO,
-                self.interval,
+            let waited = wake::wait(
+                &self.listener,
+                &readers.exit_fds(),
+                next_check.saturating_duration_since(Instant::now()),
+                |id| hello |= id == EVENT_READER_HELLO,
             );
             if stop.load(Ordering::SeqCst) {
                 break;
             }
+            let exited = waited.as_ref().is_ok_and(|&exited| exited);
             if waited.is_err() {
-                // Interrupted by a signal or a broken listener: do not spin.
-                std::thread::sleep(self.interval.min(Duration::from_millis(50)));
+                // A broken listener: do not spin.
+                std::thread::sleep(Duration::from_millis(50));
             }
             if hello {
                 self.catch_up(inner);
             }
-            if last_cleanup.elapsed() >= CLEANUP_INTERVAL {
-                cleanup_dead_nodes(&self.config);
+            let now = Instant::now();
+            if hello || exited || now >= next_check {
+                readers.check(&lock(inner).reader_nodes(), &self.config);
                 // Drops the connections (shared-memory files and descriptors) of readers
                 // that left or died; they would otherwise stay until the next send.
-                let readers = {
+                let count = {
                     let inner = lock(inner);
                     inner.update_connections();
                     inner.reader_count()
                 };
                 // A reader left or died (and whoever noticed first, a reader or this thread,
                 // removed its resources): give the heap that freed back.
-                if readers < readers_before {
+                if count < readers_before {
                     super::heap::release_free_heap();
                 }
-                readers_before = readers;
-                last_cleanup = Instant::now();
+                readers_before = count;
+                next_check = readers
+                    .next_check(now, self.interval)
+                    .unwrap_or(now + NO_READER_CHECK);
             }
         }
     }
@@ -88,16 +98,4 @@ impl Helper {
         }
         lock(inner).notify(EVENT_SNAPSHOT_PUBLISHED);
     }
-}
-
-/// Removes the resources of dead processes (readers killed without cleanup), freeing their
-/// subscriber slots and the samples they held.
-fn cleanup_dead_nodes(config: &Config) {
-    let _ = Node::<Ipc>::list(config, |state| {
-        if let NodeState::Dead(view) = state {
-            // Another process may be cleaning up the same node; that is fine.
-            let _ = view.try_remove_stale_resources();
-        }
-        CallbackProgression::Continue
-    });
 }

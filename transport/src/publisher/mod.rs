@@ -5,6 +5,7 @@ mod heap;
 mod helper;
 mod loan;
 mod ports;
+mod reader_watch;
 mod retained;
 mod segment_publisher;
 pub mod shm;

@@ -13,10 +13,11 @@ use crate::protocol::{
     EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP, Ipc, MANIFEST_LAYER_ID,
     ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
 };
+use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::update_connections::UpdateConnections;
-use iceoryx2::prelude::{EventId, Node};
+use iceoryx2::prelude::{CallbackProgression, EventId, Node};
 use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 
@@ -112,7 +113,9 @@ impl PublisherBuilder {
         self
     }
 
-    /// How long the helper thread waits for reader announcements between housekeeping rounds.
+    /// How often the helper thread asks iceoryx2 whether a reader whose process it cannot
+    /// watch (another pid namespace) is alive (default 200 ms). Other readers are watched
+    /// through a pidfd: their exit wakes the helper at once.
     pub fn liveness_interval(mut self, value: Duration) -> Self {
         self.liveness_interval = value.max(Duration::from_millis(1));
         self
@@ -231,6 +234,28 @@ impl Inner {
             // A failing connection is retried on the next send; nothing to report here.
             let _ = stream.port.publisher.update_connections();
         }
+    }
+
+    /// The nodes of the readers connected now (of the stream's subscribers, all but the
+    /// writer's own).
+    pub(crate) fn reader_nodes(&self) -> Vec<UniqueNodeId> {
+        let Some(s) = &self.stream else {
+            return Vec::new();
+        };
+        let config = s.port.service.dynamic_config();
+        let mut writers = Vec::new();
+        config.list_publishers(|p| {
+            writers.push(p.node_id);
+            CallbackProgression::Continue
+        });
+        let mut readers = Vec::new();
+        config.list_subscribers(|sub| {
+            if !writers.contains(&sub.node_id) && !readers.contains(&sub.node_id) {
+                readers.push(sub.node_id);
+            }
+            CallbackProgression::Continue
+        });
+        readers
     }
 
     /// Readers connected to the scene now (the stream's subscribers but the writer's own).

@@ -3,12 +3,10 @@
 
 mod assembly;
 mod error;
-mod process_watch;
 mod segment;
 pub(crate) use segment::HeldSegment;
 mod segment_subscriber;
 mod snapshot;
-mod wake;
 
 pub use error::{ReaderOpenError, ReceiveError};
 pub use segment_subscriber::{SegmentSubscriber, SubscriberBuilder, WriterStatus};

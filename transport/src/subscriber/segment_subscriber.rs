@@ -21,16 +21,16 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use iceoryx2_bb_posix::signal::SignalHandler;
 
 use super::assembly::Assembly;
-use super::process_watch::ProcessWatch;
 use super::segment::HeldSegment;
 use super::snapshot::Snapshot;
-use super::wake;
 use super::{ReaderOpenError, ReceiveError};
 use crate::SetupError;
+use crate::process_watch::ProcessWatch;
 use crate::protocol::{
     self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
     SceneServices, SegmentHeader,
 };
+use crate::wake;
 
 type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
 type SegmentSub = Subscriber<Ipc, [Block128], SegmentHeader>;
@@ -353,9 +353,11 @@ impl SegmentSubscriber {
                 .min(until_retry)
                 .max(Duration::from_micros(100));
             let mut writer_gone = false;
-            let exited = wake::wait(&self.events, self.writer_process.exit_fd(), slice, |id| {
+            let exit_fd = self.writer_process.exit_fd();
+            let exited = wake::wait(&self.events, exit_fd.as_slice(), slice, |id| {
                 writer_gone |= id == EVENT_WRITER_GONE
-            })?;
+            })
+            .map_err(|e| ReceiveError::Wait { reason: e.reason() })?;
             if self.termination_requested() {
                 return Err(ReceiveError::Terminated);
             }

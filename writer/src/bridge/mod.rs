@@ -40,8 +40,9 @@ use zeromq::{Socket, SocketOptions, SocketRecv, SubSocket};
 
 use self::follow::Follower;
 
-/// How often the loop wakes without a message, to see signals and `--seconds`.
-const TICK: Duration = Duration::from_millis(100);
+/// How often the loop wakes without a message, to see signals and `--seconds` (SIGINT and
+/// SIGTERM take effect within this time; each wake-up costs an idle bridge CPU).
+const TICK: Duration = Duration::from_millis(500);
 
 /// Arguments of `ygg-writer bridge-zmq`.
 #[derive(clap::Parser, Debug)]

@@ -1,11 +1,13 @@
-//! One wait for the writer's events and, beside them, the exit of the writer's process.
+//! One wait for an iceoryx2 listener's events and, beside them, the exit of processes.
 //!
 //! iceoryx2's `Listener::timed_wait` can only wait for events, so a reader that must also
-//! notice a killed writer (which sends none) used to wake every liveness interval to ask.
-//! Polling the listener's socket together with the pidfd of the writer's process
-//! ([`ProcessWatch`](super::process_watch::ProcessWatch)) wakes the reader when either has
-//! something, and otherwise not at all: an idle reader no longer spends CPU on periodic
-//! wake-ups, and a killed writer is noticed at once instead of within the interval.
+//! notice a killed writer (which sends none), and a writer that must clean up after killed
+//! readers, used to wake every liveness interval to ask iceoryx2. Polling the listener's
+//! socket together with pidfds of those processes ([`ProcessWatch`]) wakes the thread
+//! when either has something, and otherwise not at all: idle readers and writers no
+//! longer spend CPU on periodic wake-ups, and a killed process is noticed at once.
+//!
+//! [`ProcessWatch`]: crate::process_watch::ProcessWatch
 
 #![allow(
     unsafe_code,
@@ -21,42 +23,56 @@ use iceoryx2_bb_posix::file_descriptor::FileDescriptorBased as _;
 use rustix::event::{PollFd, PollFlags, Timespec, poll};
 use rustix::io::Errno;
 
-use super::ReceiveError;
 use crate::protocol::Ipc;
 
-/// Waits up to `timeout` until `listener` has events or the process behind `exit_fd` (a
-/// pidfd) exits or a signal arrives, then hands every event that arrived to `on_event`
-/// without blocking. Returns whether the process behind `exit_fd` has exited.
+/// Waiting failed: the poll or iceoryx2's collection of the events.
+#[derive(Debug, thiserror::Error)]
+#[error("waiting for events failed: {0}")]
+pub(crate) struct WaitFailed(String);
+
+impl WaitFailed {
+    /// What failed.
+    pub(crate) fn reason(self) -> String {
+        self.0
+    }
+}
+
+/// Waits up to `timeout` until `listener` has events, a process behind one of `exit_fds`
+/// (pidfds) exits, or a signal arrives; then hands every event that arrived to `on_event`
+/// without blocking. Returns whether a process behind `exit_fds` has exited.
 ///
 /// # Errors
-/// [`ReceiveError::Wait`] when polling or collecting the events fails.
-pub(super) fn wait(
+/// [`WaitFailed`] when the poll or collecting the events fails.
+pub(crate) fn wait(
     listener: &Listener<Ipc>,
-    exit_fd: Option<BorrowedFd<'_>>,
+    exit_fds: &[BorrowedFd<'_>],
     timeout: Duration,
     on_event: impl FnMut(EventId),
-) -> Result<bool, ReceiveError> {
-    let failed = |reason: String| ReceiveError::Wait { reason };
-    let listener_fd = descriptor(listener);
-    let mut fds = [
-        PollFd::from_borrowed_fd(listener_fd, PollFlags::IN),
-        PollFd::from_borrowed_fd(exit_fd.unwrap_or(listener_fd), PollFlags::IN),
-    ];
-    let polled = if exit_fd.is_some() { 2 } else { 1 };
+) -> Result<bool, WaitFailed> {
+    let mut fds = Vec::with_capacity(1 + exit_fds.len());
+    fds.push(PollFd::from_borrowed_fd(
+        descriptor(listener),
+        PollFlags::IN,
+    ));
+    fds.extend(
+        exit_fds
+            .iter()
+            .map(|&fd| PollFd::from_borrowed_fd(fd, PollFlags::IN)),
+    );
     let timeout = Timespec {
         tv_sec: i64::try_from(timeout.as_secs()).unwrap_or(i64::MAX),
         tv_nsec: i64::from(timeout.subsec_nanos()),
     };
-    let exited = match poll(&mut fds[..polled], Some(&timeout)) {
-        Ok(_) => polled == 2 && !fds[1].revents().is_empty(),
+    let exited = match poll(&mut fds, Some(&timeout)) {
+        Ok(_) => fds[1..].iter().any(|fd| !fd.revents().is_empty()),
         // A signal: the caller looks at what it asks for.
         Err(Errno::INTR) => false,
-        Err(e) => return Err(failed(format!("poll of the event socket: {e}"))),
+        Err(e) => return Err(WaitFailed(format!("poll of the event socket: {e}"))),
     };
     let mut on_event = on_event;
     listener
         .try_wait(|activation| on_event(activation.id))
-        .map_err(|e| failed(e.to_string()))?;
+        .map_err(|e| WaitFailed(e.to_string()))?;
     Ok(exited)
 }
 
@@ -100,7 +116,7 @@ mod tests {
         let notifier = service.notifier_builder().create().expect("notifier");
 
         let start = Instant::now();
-        let exited = wait(&listener, None, Duration::from_millis(50), |_| {}).expect("wait");
+        let exited = wait(&listener, &[], Duration::from_millis(50), |_| {}).expect("wait");
         assert!(!exited);
         assert!(
             start.elapsed() >= Duration::from_millis(45),
@@ -112,7 +128,7 @@ mod tests {
             .expect("notify");
         let mut ids = Vec::new();
         let exited =
-            wait(&listener, None, Duration::from_secs(10), |id| ids.push(id)).expect("wait");
+            wait(&listener, &[], Duration::from_secs(10), |id| ids.push(id)).expect("wait");
         assert!(!exited);
         assert_eq!(ids, [EventId::new(3)]);
 
@@ -123,13 +139,8 @@ mod tests {
         let pid = Pid::from_raw(child.id().cast_signed()).expect("pid");
         let pidfd = pidfd_open(pid, PidfdFlags::empty()).expect("pidfd");
         let start = Instant::now();
-        let exited = wait(
-            &listener,
-            Some(pidfd.as_fd()),
-            Duration::from_secs(10),
-            |_| {},
-        )
-        .expect("wait");
+        let exited =
+            wait(&listener, &[pidfd.as_fd()], Duration::from_secs(10), |_| {}).expect("wait");
         assert!(exited, "the child's exit ends the wait");
         assert!(start.elapsed() < Duration::from_secs(5));
         child.wait().expect("reap");

@@ -1,4 +1,4 @@
-//! A cheap check, between iceoryx2's own, that the writer's process still runs.
+//! A cheap check, between iceoryx2's own, that a node's process still runs.
 //!
 //! iceoryx2's liveness check of one node ([`Node::state_of`](iceoryx2::prelude::Node)) lists
 //! every node of the system and reads and parses each one's details file (TOML holding a
@@ -6,7 +6,8 @@
 //! of processes, in every reader at every liveness interval. Measured with a bridge and four
 //! readers (`ygg-bench hydra`), that was most of an idle reader's CPU.
 //!
-//! After iceoryx2 has found the writer's node alive once, a [`ProcessWatch`] opens a pidfd
+//! A reader watches its writer's node, a writer's helper thread each reader's. After
+//! iceoryx2 has found a node alive once, a [`ProcessWatch`] opens a pidfd
 //! on the node's process (Linux 5.3 or later) and later checks only that: a poll that does
 //! not wait tells whether the process has exited. iceoryx2 stays the authority: a process
 //! that exited, a different node, and every [`CONFIRM_INTERVAL`] go through its check again.
@@ -27,9 +28,9 @@ use rustix::process::{Pid, PidfdFlags, pidfd_open};
 /// How long a pidfd's answer stands before iceoryx2's check confirms the node again.
 const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);
 
-/// The writer node's process, watched through a pidfd.
+/// A node's process, watched through a pidfd.
 #[derive(Debug, Default)]
-pub(super) struct ProcessWatch {
+pub(crate) struct ProcessWatch {
     watched: Option<Watched>,
 }
 
@@ -46,7 +47,7 @@ impl ProcessWatch {
     /// Whether `node`'s process is known to run without asking iceoryx2: it is the node
     /// watched, its process has not exited, and iceoryx2 confirmed it alive less than
     /// [`CONFIRM_INTERVAL`] ago. `false` means "ask iceoryx2", not "dead".
-    pub(super) fn runs(&mut self, node: UniqueNodeId) -> bool {
+    pub(crate) fn runs(&mut self, node: UniqueNodeId) -> bool {
         let Some(w) = &mut self.watched else {
             return false;
         };
@@ -62,7 +63,7 @@ impl ProcessWatch {
     /// The pidfd to wait on beside the writer's events: it polls readable when the
     /// watched process exits. `None` when nothing is watched or the process is known to
     /// have exited (waiting on it would return at once).
-    pub(super) fn exit_fd(&self) -> Option<BorrowedFd<'_>> {
+    pub(crate) fn exit_fd(&self) -> Option<BorrowedFd<'_>> {
         self.watched
             .as_ref()
             .filter(|w| !w.exited)
@@ -70,14 +71,14 @@ impl ProcessWatch {
     }
 
     /// When iceoryx2 must confirm the watched node again; `None` when nothing is watched.
-    pub(super) fn confirm_due(&self) -> Option<Instant> {
+    pub(crate) fn confirm_due(&self) -> Option<Instant> {
         self.watched
             .as_ref()
             .map(|w| w.confirmed + CONFIRM_INTERVAL)
     }
 
     /// iceoryx2 found `node` alive, with these details: watch its process from now on.
-    pub(super) fn confirmed(&mut self, node: UniqueNodeId, details: Option<&NodeDetails>) {
+    pub(crate) fn confirmed(&mut self, node: UniqueNodeId, details: Option<&NodeDetails>) {
         if let Some(w) = &mut self.watched
             && w.node == node
         {
@@ -96,7 +97,7 @@ impl ProcessWatch {
     }
 
     /// Forgets the watched process (iceoryx2 found its node dead or gone).
-    pub(super) fn forget(&mut self) {
+    pub(crate) fn forget(&mut self) {
         self.watched = None;
     }
 }
