@@ -50,6 +50,8 @@ enum Command {
 
 fn main() -> ExitCode {
     ygg_transport::init_iceoryx_logging();
+    // Zenoh's own log, only when asked for (e.g. RUST_LOG=zenoh=debug).
+    zenoh::try_init_log_from_env();
     let cli = Cli::parse();
     let _ = ygg_transport::limits::raise_open_file_limit();
     let stop = Arc::new(AtomicBool::new(false));

@@ -20,6 +20,16 @@ const RECONNECT: [(&str, &str); 3] = [
     ("transport/unicast/open_timeout", "500"),
 ];
 
+/// How long (µs) a reliable put may wait for room in a link's queue before Zenoh closes the
+/// transport; set to half the lease, as Zenoh's defaults have it (5 s against 10 s).
+///
+/// Zenoh's 5 s default with a 1 s lease let a put block for 5 s on a dead link, and the
+/// transport could not close meanwhile. The peer, which gave up after its 1 s lease,
+/// reconnected into that half-closed transport: links that died again each second. In some
+/// runs data from the exporter never reached the importer after the link came back
+/// (`tests/tests/relay.rs`, about one run in ten, before this setting).
+const BLOCK_LIMIT: &str = "transport/link/tx/queue/congestion_control/block/wait_before_close";
+
 /// How a relay joins the Zenoh network (shared by `export`, `import` and `put`).
 #[derive(Args, Debug, Clone)]
 pub struct NetworkArgs {
@@ -83,7 +93,12 @@ impl NetworkArgs {
         }
         // Tuned for healing a link within about a second, where the file keeps Zenoh's default.
         let defaults = zenoh::Config::default();
-        for (key, value) in RECONNECT {
+        let block_limit = (lease * 1000 / 2).to_string();
+        let tuned = RECONNECT
+            .iter()
+            .copied()
+            .chain([(BLOCK_LIMIT, block_limit.as_str())]);
+        for (key, value) in tuned {
             if config.get_json(key).ok() == defaults.get_json(key).ok() {
                 config
                     .insert_json5(key, value)
@@ -141,6 +156,8 @@ mod tests {
             .get_json("transport/unicast/open_timeout")
             .expect("key");
         assert_eq!(open_timeout, "500");
+        let block_limit = config.get_json(BLOCK_LIMIT).expect("key");
+        assert_eq!(block_limit, "500000", "half the 1000 ms lease, in µs");
     }
 
     #[test]

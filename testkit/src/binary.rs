@@ -5,54 +5,53 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 /// Env var naming a directory that holds prebuilt `ygg-writer` / `ygg-reader` /
-/// `ygg-bench` binaries (examples in its `examples/` folder).
+/// `ygg-bench` / `ygg-relay` binaries (examples in its `examples/` folder).
 pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 
-/// Path of the workspace binary `name` (`ygg-writer`, `ygg-reader` or `ygg-bench`).
+/// Path of the workspace binary `name` (`ygg-writer`, `ygg-reader`, `ygg-bench` or `ygg-relay`).
 ///
 /// Binaries of other packages are not exposed to this package by cargo
 /// (`CARGO_BIN_EXE_*` is per package), so the harness takes them from [`ENV_BIN_DIR`] if set,
 /// else from the profile directory of the running executable
-/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first runs
-/// `cargo build -p ygg-writer -p ygg-reader -p ygg-bench --bins` for that profile and target
-/// directory once (a no-op when they are up to date; cargo releases its lock while tests
-/// and `cargo run` binaries run).
+/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first builds
+/// them once for that profile and target directory ([`WORKSPACE_BUILD`]; cargo releases its
+/// lock while tests and `cargo run` binaries run).
 ///
 /// # Panics
 ///
 /// If the binary cannot be found or built.
 pub fn binary(name: &str) -> PathBuf {
-    static BUILT: OnceLock<PathBuf> = OnceLock::new();
-    let dir = BUILT.get_or_init(|| {
-        located(&[
-            "-p",
-            "ygg-writer",
-            "-p",
-            "ygg-reader",
-            "-p",
-            "ygg-bench",
-            "--bins",
-        ])
-    });
-    existing(dir.join(name))
+    existing(built_profile_dir().join(name))
 }
 
 /// Path of the example `name` of `ygg-examples` (`target/<profile>/examples/<name>`),
-/// found and built like [`binary`] (`cargo build -p ygg-examples --examples`).
+/// found and built like [`binary`].
 ///
 /// # Panics
 ///
 /// If the example cannot be found or built.
 pub fn example(name: &str) -> PathBuf {
+    existing(built_profile_dir().join("examples").join(name))
+}
+
+/// The arguments of the one `cargo build` the harness runs.
+///
+/// Whole workspace, tests included: cargo unifies features over the packages and targets
+/// it builds, so this asks for exactly the feature set `cargo test --workspace` has just
+/// compiled with. Everything but the binaries' final link is then up to date. A narrower
+/// build (`-p ygg-writer --bins`) resolves other features and compiles every dependency a
+/// second time: minutes on two cores and gigabytes in `target/`.
+pub const WORKSPACE_BUILD: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
+
+fn built_profile_dir() -> &'static Path {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();
-    let dir = BUILT.get_or_init(|| located(&["-p", "ygg-examples", "--examples"]));
-    existing(dir.join("examples").join(name))
+    BUILT.get_or_init(|| located(&WORKSPACE_BUILD))
 }
 
 fn existing(path: PathBuf) -> PathBuf {
     assert!(
         path.is_file(),
-        "{} not found; build it (cargo build --workspace --bins --examples) or set {ENV_BIN_DIR}",
+        "{} not found; build it (cargo build --workspace --bins --examples --tests) or set {ENV_BIN_DIR}",
         path.display()
     );
     path

@@ -12,7 +12,7 @@ use std::hash::{DefaultHasher, Hash, Hasher};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 use rustix::process::Signal;
@@ -61,41 +61,9 @@ impl Link {
     }
 }
 
-/// The `ygg-relay` binary of this profile, built once if run by cargo (the testkit builds
-/// only the writer, reader and bench binaries).
+/// The `ygg-relay` binary of this profile (the testkit builds every binary of the workspace).
 fn relay_binary() -> PathBuf {
-    static BUILT: OnceLock<PathBuf> = OnceLock::new();
-    BUILT
-        .get_or_init(|| {
-            let dir = binary("ygg-writer")
-                .parent()
-                .expect("a binary lives in a directory")
-                .to_owned();
-            if let Some(cargo) = std::env::var_os("CARGO") {
-                let mut build = Command::new(cargo);
-                build.args(["build", "-p", "ygg-relay", "--bins"]);
-                match dir.file_name().and_then(|n| n.to_str()) {
-                    Some("release") => {
-                        build.arg("--release");
-                    }
-                    Some("debug") | None => {}
-                    Some(profile) => {
-                        build.args(["--profile", profile]);
-                    }
-                }
-                if let Some(target) = dir.parent() {
-                    build.env("CARGO_TARGET_DIR", target);
-                }
-                let out = build.output().expect("run cargo build -p ygg-relay");
-                assert!(
-                    out.status.success(),
-                    "cargo build -p ygg-relay failed:\n{}",
-                    String::from_utf8_lossy(&out.stderr)
-                );
-            }
-            dir.join("ygg-relay")
-        })
-        .clone()
+    binary("ygg-relay")
 }
 
 /// The robot side's scene and the remote side's, each with its own prefix.
@@ -482,7 +450,14 @@ fn link_down_up_and_a_killed_exporter_leave_remote_readers_stale_then_resync() {
             l.starts_with("snapshot ")
                 && field(l, "generation").and_then(|g| g.parse::<u64>().ok()) > Some(kept)
         })
-        .unwrap_or_else(|| panic!("no resync after link up: {}", watch.describe()));
+        .unwrap_or_else(|| {
+            panic!(
+                "no resync after link up: {}\n{}\n{}",
+                watch.describe(),
+                importer.describe(),
+                exporter.describe()
+            )
+        });
     eprintln!("resynced after link up in {:?}: {line}", up.elapsed());
 
     // Exporter killed: the remote reader reports the writer gone; a restarted exporter
