@@ -13,9 +13,10 @@ pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 /// Binaries of other packages are not exposed to this package by cargo
 /// (`CARGO_BIN_EXE_*` is per package), so the harness takes them from [`ENV_BIN_DIR`] if set,
 /// else from the profile directory of the running executable
-/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first builds
-/// them once for that profile and target directory ([`WORKSPACE_BUILD`]; cargo releases its
-/// lock while tests and `cargo run` binaries run).
+/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first runs
+/// `cargo build --workspace --bins --examples --tests` once for that profile and target
+/// directory (the features `cargo test --workspace` compiled with, so only the binaries'
+/// final link is new; cargo releases its lock while tests and `cargo run` binaries run).
 ///
 /// # Panics
 ///
@@ -41,7 +42,7 @@ pub fn example(name: &str) -> PathBuf {
 /// compiled with. Everything but the binaries' final link is then up to date. A narrower
 /// build (`-p ygg-writer --bins`) resolves other features and compiles every dependency a
 /// second time: minutes on two cores and gigabytes in `target/`.
-pub const WORKSPACE_BUILD: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
+const WORKSPACE_BUILD: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
 
 fn built_profile_dir() -> &'static Path {
     static BUILT: OnceLock<PathBuf> = OnceLock::new();

@@ -19,11 +19,14 @@
 use std::os::fd::{AsFd as _, BorrowedFd, OwnedFd};
 use std::time::{Duration, Instant};
 
+use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
-use iceoryx2::node::NodeDetails;
-use iceoryx2::prelude::SemanticString as _;
+use iceoryx2::node::{NodeDetails, NodeView as _};
+use iceoryx2::prelude::{Node, NodeState, SemanticString as _};
 use rustix::event::{PollFd, PollFlags, Timespec, poll};
 use rustix::process::{Pid, PidfdFlags, pidfd_open};
+
+use crate::protocol::Ipc;
 
 /// How long a pidfd's answer stands before iceoryx2's check confirms the node again.
 const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);
@@ -43,11 +46,49 @@ struct Watched {
     exited: bool,
 }
 
+/// What [`ProcessWatch::check`] found out about a node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Liveness {
+    /// Its process runs (the pidfd says so, or iceoryx2 found the node alive).
+    Alive,
+    /// The node is dead (its resources are now removed) or no longer exists.
+    Gone,
+    /// iceoryx2 could not tell now; ask again later.
+    Unknown,
+}
+
 impl ProcessWatch {
+    /// Whether `node` lives: the pidfd answers while it can ([`ProcessWatch::runs`]),
+    /// iceoryx2 otherwise. A node found alive is watched from then on. A dead one is
+    /// forgotten and the resources it left are removed: the ports holding samples of a
+    /// writer's pool, the publisher slot a restarted writer claims (another process may be
+    /// removing them at the same time, which is fine).
+    pub(crate) fn check(&mut self, node: UniqueNodeId, config: &Config) -> Liveness {
+        if self.runs(node) {
+            return Liveness::Alive;
+        }
+        match Node::<Ipc>::state_of(config, node) {
+            Ok(Some(NodeState::Alive(view))) => {
+                self.confirmed(node, view.details().as_ref());
+                Liveness::Alive
+            }
+            Ok(Some(NodeState::Dead(view))) => {
+                self.forget();
+                let _ = view.try_remove_stale_resources();
+                Liveness::Gone
+            }
+            Ok(None) => {
+                self.forget();
+                Liveness::Gone
+            }
+            Ok(Some(_)) | Err(_) => Liveness::Unknown,
+        }
+    }
+
     /// Whether `node`'s process is known to run without asking iceoryx2: it is the node
     /// watched, its process has not exited, and iceoryx2 confirmed it alive less than
     /// [`CONFIRM_INTERVAL`] ago. `false` means "ask iceoryx2", not "dead".
-    pub(crate) fn runs(&mut self, node: UniqueNodeId) -> bool {
+    fn runs(&mut self, node: UniqueNodeId) -> bool {
         let Some(w) = &mut self.watched else {
             return false;
         };
@@ -78,7 +119,7 @@ impl ProcessWatch {
     }
 
     /// iceoryx2 found `node` alive, with these details: watch its process from now on.
-    pub(crate) fn confirmed(&mut self, node: UniqueNodeId, details: Option<&NodeDetails>) {
+    fn confirmed(&mut self, node: UniqueNodeId, details: Option<&NodeDetails>) {
         if let Some(w) = &mut self.watched
             && w.node == node
         {
@@ -97,7 +138,7 @@ impl ProcessWatch {
     }
 
     /// Forgets the watched process (iceoryx2 found its node dead or gone).
-    pub(crate) fn forget(&mut self) {
+    fn forget(&mut self) {
         self.watched = None;
     }
 }
@@ -118,14 +159,14 @@ fn open_matching(details: &NodeDetails) -> Option<OwnedFd> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::protocol::{Ipc, iceoryx_config};
-    use iceoryx2::node::NodeView as _;
+    use crate::protocol::iceoryx_config;
     use iceoryx2::prelude::*;
 
-    /// A node of this process, and its details as iceoryx2 reads them back.
-    fn own_node(prefix: &str) -> (Node<Ipc>, Option<NodeDetails>) {
+    /// A node of this process under an iceoryx2 prefix of its own (`prefix` and the pid),
+    /// and its details as iceoryx2 reads them back.
+    pub(crate) fn own_node(prefix: &str) -> (Node<Ipc>, Option<NodeDetails>) {
         let prefix = format!("ygg_pw_{prefix}_{}_", std::process::id());
         let config = iceoryx_config(Some(&prefix)).expect("config");
         let node = NodeBuilder::new()

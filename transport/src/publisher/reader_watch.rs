@@ -15,10 +15,8 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
-use iceoryx2::prelude::{Node, NodeState};
 
-use crate::process_watch::ProcessWatch;
-use crate::protocol::Ipc;
+use crate::process_watch::{Liveness, ProcessWatch};
 
 /// The reader nodes of one writer and their processes.
 #[derive(Debug, Default)]
@@ -38,27 +36,7 @@ impl ReaderWatch {
         }
         let mut gone = false;
         for (id, watch) in &mut self.readers {
-            if watch.runs(*id) {
-                continue;
-            }
-            match Node::<Ipc>::state_of(config, *id) {
-                Ok(Some(NodeState::Alive(view))) => {
-                    use iceoryx2::node::NodeView as _;
-                    watch.confirmed(*id, view.details().as_ref());
-                }
-                Ok(Some(NodeState::Dead(view))) => {
-                    // Another process may be cleaning up the same node; that is fine.
-                    let _ = view.try_remove_stale_resources();
-                    watch.forget();
-                    gone = true;
-                }
-                Ok(None) => {
-                    watch.forget();
-                    gone = true;
-                }
-                // Cannot tell now: asked again at the next check.
-                Ok(Some(_)) | Err(_) => {}
-            }
+            gone |= watch.check(*id, config) == Liveness::Gone;
         }
         gone
     }
@@ -88,17 +66,12 @@ impl ReaderWatch {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::iceoryx_config;
-    use iceoryx2::prelude::*;
+    use crate::process_watch::tests::own_node;
 
     #[test]
     fn readers_are_watched_and_forgotten_with_the_stream_subscribers() {
-        let prefix = format!("ygg_rw_{}_", std::process::id());
-        let config = iceoryx_config(Some(&prefix)).expect("config");
-        let node = NodeBuilder::new()
-            .config(&config)
-            .create::<Ipc>()
-            .expect("node");
+        let (node, _) = own_node("rw");
+        let config = node.config().clone();
         let id = *node.id();
         let mut watch = ReaderWatch::default();
         let now = Instant::now();

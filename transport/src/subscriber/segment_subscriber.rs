@@ -7,12 +7,11 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
-use iceoryx2::node::NodeView as _;
 use iceoryx2::port::ReceiveError as IoxReceiveError;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::{CallbackProgression, Node, NodeState};
+use iceoryx2::prelude::{CallbackProgression, Node};
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::port_factory::PortFactory as _;
@@ -25,7 +24,7 @@ use super::segment::HeldSegment;
 use super::snapshot::Snapshot;
 use super::{ReaderOpenError, ReceiveError};
 use crate::SetupError;
-use crate::process_watch::ProcessWatch;
+use crate::process_watch::{Liveness, ProcessWatch};
 use crate::protocol::{
     self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
     SceneServices, SegmentHeader,
@@ -186,7 +185,7 @@ impl SubscriberBuilder {
             hello,
             _events_service: events_service,
             _readers_service: readers_service,
-            node,
+            _node: node,
         };
         reader.check_liveness();
         reader.say_hello();
@@ -246,7 +245,8 @@ pub struct SegmentSubscriber {
     hello: Notifier<Ipc>,
     _events_service: EventFactory<Ipc>,
     _readers_service: EventFactory<Ipc>,
-    node: Node<Ipc>,
+    /// This reader's iceoryx2 node: it owns the ports above, so it is dropped last.
+    _node: Node<Ipc>,
 }
 
 impl std::fmt::Debug for SegmentSubscriber {
@@ -428,21 +428,12 @@ impl SegmentSubscriber {
             });
         let alive = match writer {
             None => false,
-            Some(id) if self.writer_process.runs(id) => true,
-            Some(id) => match Node::<Ipc>::state_of(&self.config, id) {
-                Ok(Some(NodeState::Alive(view))) => {
-                    self.writer_process.confirmed(id, view.details().as_ref());
-                    true
-                }
-                Ok(Some(NodeState::Dead(_)) | None) => {
-                    self.writer_process.forget();
-                    // Frees the dead writer's publisher slot (so a restarted writer can claim
-                    // it) and wakes other readers. Held samples stay mapped.
-                    self.node.try_cleanup_dead_nodes();
-                    false
-                }
+            Some(id) => match self.writer_process.check(id, &self.config) {
+                Liveness::Alive => true,
+                // A dead writer's resources are removed; held samples stay mapped.
+                Liveness::Gone => false,
                 // Cannot tell: assume nothing changed.
-                Ok(Some(_)) | Err(_) => self.status == WriterStatus::Alive,
+                Liveness::Unknown => self.status == WriterStatus::Alive,
             },
         };
         match (alive, self.status) {
