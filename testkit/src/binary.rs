@@ -13,10 +13,13 @@ pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 /// Binaries of other packages are not exposed to this package by cargo
 /// (`CARGO_BIN_EXE_*` is per package), so the harness takes them from [`ENV_BIN_DIR`] if set,
 /// else from the profile directory of the running executable
-/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first runs
-/// `cargo build --workspace --bins --examples --tests` once for that profile and target
-/// directory (the features `cargo test --workspace` compiled with, so only the binaries'
-/// final link is new; cargo releases its lock while tests and `cargo run` binaries run).
+/// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first builds
+/// them once for that profile and target directory, with the features the running
+/// executable was compiled with, so that only the binaries' final link can be new (cargo
+/// releases its lock while tests and `cargo run` binaries run): a test runs
+/// `cargo build --workspace --bins --examples --tests` (what `cargo test --workspace`
+/// compiled), a tool such as `cargo run -p ygg-bench` runs
+/// `cargo build -p ygg-writer -p ygg-reader -p ygg-bench --bins`.
 ///
 /// # Panics
 ///
@@ -35,20 +38,6 @@ pub fn example(name: &str) -> PathBuf {
     existing(built_profile_dir().join("examples").join(name))
 }
 
-/// The arguments of the one `cargo build` the harness runs.
-///
-/// Whole workspace, tests included: cargo unifies features over the packages and targets
-/// it builds, so this asks for exactly the feature set `cargo test --workspace` has just
-/// compiled with. Everything but the binaries' final link is then up to date. A narrower
-/// build (`-p ygg-writer --bins`) resolves other features and compiles every dependency a
-/// second time: minutes on two cores and gigabytes in `target/`.
-const WORKSPACE_BUILD: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
-
-fn built_profile_dir() -> &'static Path {
-    static BUILT: OnceLock<PathBuf> = OnceLock::new();
-    BUILT.get_or_init(|| located(&WORKSPACE_BUILD))
-}
-
 fn existing(path: PathBuf) -> PathBuf {
     assert!(
         path.is_file(),
@@ -58,23 +47,51 @@ fn existing(path: PathBuf) -> PathBuf {
     path
 }
 
-/// The directory of prebuilt binaries, or the profile directory of this executable after
-/// `cargo build <what>` there (when run by cargo).
-fn located(what: &[&str]) -> PathBuf {
-    if let Some(dir) = std::env::var_os(ENV_BIN_DIR) {
-        return PathBuf::from(dir);
-    }
-    let exe = std::env::current_exe().expect("path of the running executable");
-    let dir = exe.parent().expect("an executable lives in a directory");
-    let profile_dir = if dir.ends_with("deps") || dir.ends_with("examples") {
-        dir.parent().expect("deps has a parent")
-    } else {
-        dir
-    };
-    if let Some(cargo) = std::env::var_os("CARGO") {
-        cargo_build(Path::new(&cargo), profile_dir, what);
-    }
-    profile_dir.to_owned()
+/// What a test (an executable in `target/<profile>/deps/`) builds: the whole workspace with
+/// its tests. Cargo unifies features over the packages and targets it builds, so this is the
+/// feature set `cargo test --workspace` has just compiled with. A narrower selection would
+/// resolve other features and compile every dependency a second time (minutes on two cores
+/// and gigabytes in `target/`).
+const FROM_A_TEST: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
+
+/// What a tool run by `cargo run -p ygg-bench` builds: the executables it starts, with the
+/// features of `-p ygg-bench` (which depends on the writer and the reader).
+const FROM_A_TOOL: [&str; 7] = [
+    "-p",
+    "ygg-writer",
+    "-p",
+    "ygg-reader",
+    "-p",
+    "ygg-bench",
+    "--bins",
+];
+
+/// The directory of prebuilt binaries ([`ENV_BIN_DIR`]), or the profile directory of this
+/// executable after the `cargo build` above there (when run by cargo); built once.
+fn built_profile_dir() -> &'static Path {
+    static BUILT: OnceLock<PathBuf> = OnceLock::new();
+    BUILT.get_or_init(|| {
+        if let Some(dir) = std::env::var_os(ENV_BIN_DIR) {
+            return PathBuf::from(dir);
+        }
+        let exe = std::env::current_exe().expect("path of the running executable");
+        let dir = exe.parent().expect("an executable lives in a directory");
+        let from_a_test = dir.ends_with("deps") || dir.ends_with("examples");
+        let profile_dir = if from_a_test {
+            dir.parent().expect("deps has a parent")
+        } else {
+            dir
+        };
+        if let Some(cargo) = std::env::var_os("CARGO") {
+            let what: &[&str] = if from_a_test {
+                &FROM_A_TEST
+            } else {
+                &FROM_A_TOOL
+            };
+            cargo_build(Path::new(&cargo), profile_dir, what);
+        }
+        profile_dir.to_owned()
+    })
 }
 
 fn cargo_build(cargo: &Path, profile_dir: &Path, what: &[&str]) {
