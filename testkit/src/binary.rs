@@ -16,10 +16,10 @@ pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 /// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first builds
 /// them once for that profile and target directory, with the features the running
 /// executable was compiled with, so that only the binaries' final link can be new (cargo
-/// releases its lock while tests and `cargo run` binaries run): a test runs
-/// `cargo build --workspace --bins --examples --tests` (what `cargo test --workspace`
-/// compiled), a tool such as `cargo run -p ygg-bench` runs
-/// `cargo build -p ygg-writer -p ygg-reader -p ygg-bench --bins`.
+/// releases its lock while tests and `cargo run` binaries run): `cargo run -p ygg-bench`
+/// runs `cargo build -p ygg-writer -p ygg-reader -p ygg-bench --bins`, a test (and a tool
+/// a test starts) `cargo build --workspace --bins --examples --tests` (what
+/// `cargo test --workspace` compiled).
 ///
 /// # Panics
 ///
@@ -83,10 +83,14 @@ fn built_profile_dir() -> &'static Path {
             dir
         };
         if let Some(cargo) = std::env::var_os("CARGO") {
-            let what: &[&str] = if from_a_test {
-                &FROM_A_TEST
-            } else {
+            // `cargo run -p ygg-bench` sets CARGO_PKG_NAME to ygg-bench; a tool a test starts
+            // inherits the test's (and the test has built the workspace's set).
+            let run_as_a_tool = !from_a_test
+                && std::env::var("CARGO_PKG_NAME").is_ok_and(|name| name == "ygg-bench");
+            let what: &[&str] = if run_as_a_tool {
                 &FROM_A_TOOL
+            } else {
+                &FROM_A_TEST
             };
             cargo_build(Path::new(&cargo), profile_dir, what);
         }
