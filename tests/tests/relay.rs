@@ -9,7 +9,7 @@
 
 use std::collections::BTreeMap;
 use std::hash::{DefaultHasher, Hash, Hasher};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -61,11 +61,6 @@ impl Link {
     }
 }
 
-/// The `ygg-relay` binary of this profile (the testkit builds every binary of the workspace).
-fn relay_binary() -> PathBuf {
-    binary("ygg-relay")
-}
-
 /// The robot side's scene and the remote side's, each with its own prefix.
 struct Hosts {
     link: Link,
@@ -80,7 +75,7 @@ impl Hosts {
         // Built (or found) before a test starts its watchdog: a cold build of the relay and
         // its Zenoh dependencies takes minutes on a fresh 2-core machine, and a watchdog that
         // fired during it killed the test's writer (seen in a clean-clone CI run).
-        relay_binary();
+        binary("ygg-relay");
         binary("ygg-writer");
         let robot = TestScene::new(tag);
         let remote = TestScene::new(tag);
@@ -124,7 +119,9 @@ impl Hosts {
             "--listen",
             &listen,
         ];
-        let command = self.link.command(0, &self.robot, &relay_binary(), &args);
+        let command = self
+            .link
+            .command(0, &self.robot, &binary("ygg-relay"), &args);
         Proc::spawn(command, "exporter", watchdog)
     }
 
@@ -144,7 +141,7 @@ impl Hosts {
             "--listen",
             &listen,
         ];
-        let command = self.link.command(1, scene, &relay_binary(), &args);
+        let command = self.link.command(1, scene, &binary("ygg-relay"), &args);
         Proc::spawn(command, "importer", watchdog)
     }
 
@@ -386,7 +383,7 @@ fn live_updates_cross_byte_for_byte_and_garbage_on_the_key_is_dropped() {
         ];
         let out = hosts
             .link
-            .command(0, &hosts.robot, &relay_binary(), &args)
+            .command(0, &hosts.robot, &binary("ygg-relay"), &args)
             .output()
             .expect("run ygg-relay put");
         let _ = std::fs::remove_file(&file);
@@ -501,7 +498,7 @@ fn link_down_up_and_a_killed_exporter_leave_remote_readers_stale_then_resync() {
 
 #[test]
 fn bad_arguments_are_refused_with_a_clear_error() {
-    let relay = relay_binary();
+    let relay = binary("ygg-relay");
     for (args, says) in [
         (
             vec!["export", "--scene", "s", "--key", "a/b"],
