@@ -17,8 +17,32 @@
 use crate::change::Change;
 use crate::error::{EditResult, GraphEditError};
 use crate::graph::Node;
-use crate::index::{Entry, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
+use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
 use crate::{LayerId, NodeId, Point, SceneGraph};
+
+/// The index trees of another graph that this one takes over (see
+/// [`SceneGraph::sync_to_owned`]): the trees, the nodes their handles name, and the
+/// handles of those nodes here, found as the trees are adopted.
+pub(crate) struct AdoptedTrees {
+    /// The other graph's trees (taken out one by one).
+    pub(crate) trees: LiveIndexes,
+    /// `trees.ids`, the node of each of the other graph's handles.
+    ids: Vec<NodeId>,
+    /// This graph's handle for each of the other graph's handles (`NO_HANDLE`: not yet).
+    mapped: Vec<u32>,
+}
+
+impl AdoptedTrees {
+    /// Takes over the index trees of another graph.
+    pub(crate) fn new(mut trees: LiveIndexes) -> Self {
+        let ids = std::mem::take(&mut trees.ids);
+        AdoptedTrees {
+            trees,
+            ids,
+            mapped: Vec::new(),
+        }
+    }
+}
 
 /// An update that walks between 2 and this many tree paths locates them first, all at
 /// once (see [`LiveKdTree::locate`]), if its trees hold at least
@@ -43,13 +67,21 @@ impl SceneGraph {
     /// # Errors
     /// [`GraphEditError::UnknownLayer`].
     pub fn enable_layer_index(&mut self, layer: LayerId) -> EditResult {
-        let l = self
-            .layers
-            .get(&layer)
-            .ok_or(GraphEditError::UnknownLayer(layer))?;
+        if !self.layers.contains_key(&layer) {
+            return Err(GraphEditError::UnknownLayer(layer));
+        }
         if self.indexes.layers.contains_key(&layer) {
             return Ok(());
         }
+        let tree = self.layer_tree(layer);
+        self.indexes.layers.insert(layer, tree);
+        self.touch_layer(layer, Change::All);
+        Ok(())
+    }
+
+    /// A tree over every point of `layer` (which exists), handles allocated as needed.
+    fn layer_tree(&mut self, layer: LayerId) -> OverlaidTree {
+        let l = &self.layers[&layer];
         let unhandled = l
             .nodes
             .iter()
@@ -67,11 +99,7 @@ impl SceneGraph {
                 entries.extend(node.points.iter().map(|&p| Entry { p, item: h }));
             }
         }
-        self.indexes
-            .layers
-            .insert(layer, OverlaidTree::from_entries(entries));
-        self.touch_layer(layer, Change::All);
-        Ok(())
+        OverlaidTree::from_entries(entries)
     }
 
     /// Bytes held by the handle table of the live indexes: the map from the items
@@ -114,7 +142,16 @@ impl SceneGraph {
         if self.indexes.nodes.contains_key(&node) {
             return Ok(());
         }
-        let members = self.indexed_members(node);
+        let tree = self.node_tree(node);
+        self.indexes.nodes.insert(node, tree);
+        self.touch_layer(layer, Change::All);
+        Ok(())
+    }
+
+    /// A tree over every point in `root`'s sub-tree (`root` exists), handles allocated as
+    /// needed.
+    fn node_tree(&mut self, root: NodeId) -> OverlaidTree {
+        let members = self.indexed_members(root);
         let unhandled = members
             .iter()
             .filter(|(id, _)| self.nodes[id].index_handle == NO_HANDLE)
@@ -125,11 +162,84 @@ impl SceneGraph {
             let h = self.index_handle_of(id);
             entries.extend(points.into_iter().map(|p| Entry { p, item: h }));
         }
-        self.indexes
-            .nodes
-            .insert(node, OverlaidTree::from_entries(entries));
-        self.touch_layer(layer, Change::All);
-        Ok(())
+        OverlaidTree::from_entries(entries)
+    }
+
+    /// Takes the layer index of `layer` and the node indexes rooted at `roots` out of
+    /// upkeep, for an edit that changes much of them: mutations skip them until
+    /// [`Self::restore_layer_index`] and [`Self::restore_node_index`] put them back (built
+    /// again, or adopted). Nothing is journaled: the edits journal their own changes.
+    pub(crate) fn suspend_indexes(&mut self, layers: &[LayerId], roots: &[NodeId]) {
+        for l in layers {
+            self.indexes.layers.remove(l);
+        }
+        for r in roots {
+            self.indexes.nodes.remove(r);
+        }
+    }
+
+    /// Puts back the layer index of `layer` (which exists), suspended or new: `adopted`
+    /// (a tree over exactly the layer's points from another graph, see
+    /// [`AdoptedTrees`]), else a tree built from the layer. A new index is journaled as
+    /// [`Self::enable_layer_index`] journals it; a suspended one needs nothing more (the
+    /// point changes are journaled).
+    pub(crate) fn restore_layer_index(
+        &mut self,
+        layer: LayerId,
+        new: bool,
+        adopted: Option<(OverlaidTree, &mut AdoptedTrees)>,
+    ) {
+        let tree = match adopted {
+            Some((tree, from)) => self.adopt(tree, from),
+            None => self.layer_tree(layer),
+        };
+        self.indexes.layers.insert(layer, tree);
+        if new {
+            self.touch_layer(layer, Change::All);
+        }
+    }
+
+    /// [`Self::restore_layer_index`] for the node index rooted at `root` (which exists):
+    /// `adopted` holds exactly the points of `root`'s sub-tree.
+    pub(crate) fn restore_node_index(
+        &mut self,
+        root: NodeId,
+        new: bool,
+        adopted: Option<(OverlaidTree, &mut AdoptedTrees)>,
+    ) {
+        let tree = match adopted {
+            Some((tree, from)) => self.adopt(tree, from),
+            None => self.node_tree(root),
+        };
+        self.indexes.nodes.insert(root, tree);
+        let layer = self.nodes[&root].layer;
+        self.touch_layer(
+            layer,
+            if new {
+                Change::All
+            } else {
+                Change::IndexRoot(root)
+            },
+        );
+    }
+
+    /// `tree`, built by another graph, with its items remapped to this graph's handles
+    /// of the same nodes (which all exist here).
+    fn adopt(&mut self, mut tree: OverlaidTree, from: &mut AdoptedTrees) -> OverlaidTree {
+        let (nodes, indexes) = (&mut self.nodes, &mut self.indexes);
+        from.mapped.resize(from.ids.len(), NO_HANDLE);
+        tree.map_items(|h| {
+            let mapped = &mut from.mapped[h as usize];
+            if *mapped == NO_HANDLE {
+                let id = from.ids[h as usize];
+                let node = nodes
+                    .get_mut(&id)
+                    .expect("the other graph's nodes exist here");
+                *mapped = indexes.handle(id, &mut node.index_handle);
+            }
+            *mapped
+        });
+        tree
     }
 
     /// Disables the node index of `node` (nothing happens if it is not enabled).
@@ -169,7 +279,7 @@ impl SceneGraph {
     }
 
     /// Roots of node indexes on the path from `from` to the top (`from` included).
-    fn indexed_ancestors(&self, from: NodeId) -> Vec<NodeId> {
+    pub(crate) fn indexed_ancestors(&self, from: NodeId) -> Vec<NodeId> {
         let mut roots = Vec::new();
         if self.indexes.nodes.is_empty() {
             return roots;

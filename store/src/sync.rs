@@ -12,6 +12,8 @@
 
 use crate::feature::StoredValue;
 use crate::graph::Node;
+use crate::graph_indexes::AdoptedTrees;
+use crate::index::{LiveIndexes, OverlaidTree};
 use crate::{EditResult, FeatureValue, LayerId, NodeId, SceneGraph};
 use rustc_hash::{FxHashMap, FxHashSet};
 
@@ -78,6 +80,43 @@ impl SceneGraph {
     /// None for a `target` that holds the store's invariants (every `SceneGraph` does);
     /// an error would mean a bug, and leaves this graph partly synced (still valid).
     pub fn sync_to(&mut self, target: &SceneGraph) -> EditResult<SyncReport> {
+        self.sync(target, &target.indexes, None)
+    }
+
+    /// [`Self::sync_to`], taking `target`: an index whose points change much here (a
+    /// quarter of them or more) or that is new here takes over the target's tree
+    /// (remapping its items, O(points)) instead of being built again (O(points log
+    /// points)). For a caller that builds a graph only to sync to it (the bridge does,
+    /// per message).
+    ///
+    /// # Errors
+    /// As [`Self::sync_to`].
+    pub fn sync_to_owned(&mut self, mut target: SceneGraph) -> EditResult<SyncReport> {
+        let indexes = std::mem::take(&mut target.indexes);
+        let wanted = LiveIndexes {
+            layers: indexes
+                .layers
+                .keys()
+                .map(|&l| (l, OverlaidTree::default()))
+                .collect(),
+            nodes: indexes
+                .nodes
+                .keys()
+                .map(|&n| (n, OverlaidTree::default()))
+                .collect(),
+            ..LiveIndexes::default()
+        };
+        self.sync(&target, &wanted, Some(AdoptedTrees::new(indexes)))
+    }
+
+    /// [`Self::sync_to`] with the target's indexes `wanted` (their trees unused), and its
+    /// trees to adopt, if given.
+    fn sync(
+        &mut self,
+        target: &SceneGraph,
+        wanted: &LiveIndexes,
+        mut adopted: Option<AdoptedTrees>,
+    ) -> EditResult<SyncReport> {
         let mut report = SyncReport::default();
         let before: FxHashMap<LayerId, (u64, u64)> = self
             .layers
@@ -103,7 +142,7 @@ impl SceneGraph {
         let layer_indexes: Vec<LayerId> = self.indexes.layers.keys().copied().collect();
         for l in layer_indexes {
             let keep = target_layer_of(&self.layers[&l].name)
-                .is_some_and(|tl| target.indexes.layers.contains_key(&tl));
+                .is_some_and(|tl| wanted.layers.contains_key(&tl));
             if !keep {
                 self.disable_layer_index(l)?;
                 report.indexes_changed += 1;
@@ -111,7 +150,7 @@ impl SceneGraph {
         }
         let node_indexes: Vec<NodeId> = self.indexes.nodes.keys().copied().collect();
         for n in node_indexes {
-            if !target.indexes.nodes.contains_key(&n) {
+            if !wanted.nodes.contains_key(&n) {
                 self.disable_node_index(n)?;
                 report.indexes_changed += 1;
             }
@@ -220,7 +259,14 @@ impl SceneGraph {
             }
         }
 
-        // 8. Content: geometry, features, labels, edges, nesting, boxes.
+        // 8. Content: geometry, features, labels, edges, nesting, boxes; the indexes that
+        // are new, or that it changes by a quarter or more, are out of upkeep meanwhile.
+        let replaced = self.indexes_to_replace(target, wanted, &map);
+        let (layers, roots): (Vec<LayerId>, Vec<NodeId>) = (
+            replaced.layers.iter().map(|r| r.0).collect(),
+            replaced.roots.iter().map(|r| r.0).collect(),
+        );
+        self.suspend_indexes(&layers, &roots);
         for tl in target.layers.values() {
             for &id in &tl.nodes {
                 if self.sync_node(target, &target.nodes[&id])? {
@@ -229,19 +275,22 @@ impl SceneGraph {
             }
         }
 
-        // 9. Indexes the target has.
-        for tid in target.indexes.layers.keys() {
-            let l = map[tid];
-            if !self.indexes.layers.contains_key(&l) {
-                self.enable_layer_index(l)?;
-                report.indexes_changed += 1;
-            }
+        // 9. The indexes replaced: the target's trees adopted, else built here.
+        for (l, tl, new) in replaced.layers {
+            let tree = adopted.as_mut().and_then(|a| {
+                let tree = a.trees.layers.remove(&tl)?;
+                Some((tree, a))
+            });
+            self.restore_layer_index(l, new, tree);
+            report.indexes_changed += usize::from(new);
         }
-        for &n in target.indexes.nodes.keys() {
-            if !self.indexes.nodes.contains_key(&n) {
-                self.enable_node_index(n)?;
-                report.indexes_changed += 1;
-            }
+        for (n, new) in replaced.roots {
+            let tree = adopted.as_mut().and_then(|a| {
+                let tree = a.trees.nodes.remove(&n)?;
+                Some((tree, a))
+            });
+            self.restore_node_index(n, new, tree);
+            report.indexes_changed += usize::from(new);
         }
 
         // Nodes added in step 7 are counted there, not as changed.
@@ -255,6 +304,85 @@ impl SceneGraph {
         names.sort_unstable();
         report.changed_layers = names;
         Ok(report)
+    }
+
+    /// The indexes step 8 of [`Self::sync`] leaves out of upkeep and step 9 puts back:
+    /// those of `wanted` (the target's) that this graph lacks, and those of this graph
+    /// whose points the step changes by at least a quarter of their entries (points
+    /// that move, and the points of sub-trees nested under an indexed node), where
+    /// one build costs less than patching point by point. `map`: target layer ids to
+    /// this graph's. Called once every target node is here, in its layer, with no
+    /// nesting the target lacks.
+    fn indexes_to_replace(
+        &self,
+        target: &SceneGraph,
+        wanted: &LiveIndexes,
+        map: &FxHashMap<LayerId, LayerId>,
+    ) -> ReplacedIndexes {
+        let mut in_layers: FxHashMap<LayerId, usize> = FxHashMap::default();
+        let mut in_roots: FxHashMap<NodeId, usize> = FxHashMap::default();
+        for tl in target.layers.values() {
+            for &id in &tl.nodes {
+                let (t, node) = (&target.nodes[&id], &self.nodes[&id]);
+                if !same_points(&node.points, &t.points) {
+                    let n = node.points.len() + t.points.len();
+                    if self.indexes.layers.contains_key(&node.layer) {
+                        *in_layers.entry(node.layer).or_default() += n;
+                    }
+                    for r in self.indexed_ancestors(id) {
+                        *in_roots.entry(r).or_default() += n;
+                    }
+                }
+                if let Some(p) = t.parent
+                    && node.parent.is_none()
+                {
+                    let roots = self.indexed_ancestors(p);
+                    if !roots.is_empty() {
+                        let n = self.subtree_point_count(id);
+                        for r in roots {
+                            *in_roots.entry(r).or_default() += n;
+                        }
+                    }
+                }
+            }
+        }
+        let heavy = |tree: Option<&OverlaidTree>, changes: usize| {
+            tree.is_some_and(|t| changes > 0 && 4 * changes >= t.len())
+        };
+        let mut layers: Vec<(LayerId, LayerId, bool)> = wanted
+            .layers
+            .keys()
+            .filter_map(|tl| {
+                let l = map[tl];
+                let tree = self.indexes.layers.get(&l);
+                let changes = in_layers.get(&l).copied().unwrap_or(0);
+                (tree.is_none() || heavy(tree, changes)).then_some((l, *tl, tree.is_none()))
+            })
+            .collect();
+        layers.sort_unstable();
+        let mut roots: Vec<(NodeId, bool)> = wanted
+            .nodes
+            .keys()
+            .filter_map(|&n| {
+                let tree = self.indexes.nodes.get(&n);
+                let changes = in_roots.get(&n).copied().unwrap_or(0);
+                (tree.is_none() || heavy(tree, changes)).then_some((n, tree.is_none()))
+            })
+            .collect();
+        roots.sort_unstable();
+        ReplacedIndexes { layers, roots }
+    }
+
+    /// Points in `root`'s sub-tree (`root` included).
+    fn subtree_point_count(&self, root: NodeId) -> usize {
+        let mut count = 0;
+        let mut stack = vec![root];
+        while let Some(id) = stack.pop() {
+            let n = &self.nodes[&id];
+            count += n.points.len();
+            stack.extend(n.children.iter().copied());
+        }
+        count
     }
 
     /// Makes the content of node `t.id` (which exists, in the right layer, with no
@@ -361,6 +489,14 @@ impl SceneGraph {
         }
         Ok(changed)
     }
+}
+
+/// The indexes [`SceneGraph::sync`] replaces rather than patches.
+struct ReplacedIndexes {
+    /// Layer indexes: this graph's layer, the target's, and whether the index is new.
+    layers: Vec<(LayerId, LayerId, bool)>,
+    /// Node indexes, by root, and whether the index is new.
+    roots: Vec<(NodeId, bool)>,
 }
 
 /// Whether two point lists are equal bit for bit.

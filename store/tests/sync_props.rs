@@ -1,6 +1,7 @@
-//! Property tests of `SceneGraph::sync_to`: after it the graph equals the target (every
-//! accessor, layers matched by name), its invariants and indexes hold, a layer whose
-//! content did not differ keeps its generation, and a second sync changes nothing.
+//! Property tests of `SceneGraph::sync_to` and `sync_to_owned`: after it the graph equals
+//! the target (every accessor, layers matched by name), its invariants and indexes hold
+//! (the trees it rebuilt or adopted hold exactly their points), a layer whose content did
+//! not differ keeps its generation, and a second sync changes nothing.
 
 mod common;
 
@@ -43,13 +44,17 @@ fn build(seed: u8, ops: &[Op]) -> SceneGraph {
     g
 }
 
-/// Syncs `g` to `target` and checks every property; returns the report.
-fn check_sync(mut g: SceneGraph, target: &SceneGraph) -> Result<(), TestCaseError> {
+/// Syncs `g` to `target` (`owned`: by `sync_to_owned`, on a copy) and checks every
+/// property.
+fn check_sync(mut g: SceneGraph, target: &SceneGraph, owned: bool) -> Result<(), TestCaseError> {
     let before = fingerprints(&g, false);
     let gens = generations(&g);
-    let report = g
-        .sync_to(target)
-        .map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let report = if owned {
+        g.sync_to_owned(target.clone())
+    } else {
+        g.sync_to(target)
+    }
+    .map_err(|e| TestCaseError::fail(e.to_string()))?;
     if let Err(e) = g.check_invariants() {
         return Err(TestCaseError::fail(format!("invariants after sync: {e}")));
     }
@@ -89,8 +94,9 @@ proptest! {
         ops_a in prop::collection::vec(op(), 0..120),
         b in 0u8..20,
         ops_b in prop::collection::vec(op(), 0..120),
+        owned in any::<bool>(),
     ) {
-        check_sync(build(a, &ops_a), &build(b, &ops_b))?;
+        check_sync(build(a, &ops_a), &build(b, &ops_b), owned)?;
     }
 
     /// A graph and a few edits of it (the bridge's case: a stream of full states that
@@ -100,13 +106,14 @@ proptest! {
         a in 0u8..20,
         ops_a in prop::collection::vec(op(), 0..160),
         edits in prop::collection::vec(op(), 0..6),
+        owned in any::<bool>(),
     ) {
         let g = build(a, &ops_a);
         let mut target = g.clone();
         for op in &edits {
             let _ = apply(&mut target, op);
         }
-        check_sync(g, &target)?;
+        check_sync(g, &target, owned)?;
     }
 }
 

@@ -73,6 +73,16 @@ impl OverlaidTree {
         }
     }
 
+    /// Replaces every item `i` (in the tree and the overlay) by `map(i)`. `map` must not
+    /// send two items to one.
+    pub(crate) fn map_items(&mut self, mut map: impl FnMut(u32) -> u32) {
+        self.tree.map_items(&mut map);
+        for m in &mut self.moved {
+            m.item = map(m.item);
+        }
+        self.moved.sort_unstable_by_key(|m| m.item);
+    }
+
     /// Number of live entries.
     pub(crate) fn len(&self) -> usize {
         self.tree.len() - self.dead_len + self.overlay_len

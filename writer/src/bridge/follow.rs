@@ -136,7 +136,7 @@ impl Follower {
         }
         let synced = self.build().and_then(|target| {
             let t1 = Instant::now();
-            let report = live.sync_to(&target)?;
+            let report = live.sync_to_owned(target)?;
             Ok((report, t1))
         });
         match synced {

@@ -4,8 +4,9 @@
 //! Spark-DSG publishes the whole graph in every message: one frame, the header-less
 //! binary body of `to_binary()`. The bridge subscribes, decodes each message once,
 //! builds it in the chosen layout, brings its live graph to equal it with
-//! [`ygg_store::SceneGraph::sync_to`] (only the differences become mutations) and
-//! publishes: only the layers that changed are resent to readers.
+//! [`ygg_store::SceneGraph::sync_to_owned`] (only the differences become mutations; an
+//! index that changes much takes over the built graph's tree instead of being patched
+//! point by point) and publishes: only the layers that changed are resent to readers.
 //!
 //! Most of each message is what the last one held, so [`follow`] does not redo it: a
 //! message equal to the last byte for byte is dropped, an unchanged mesh section is

@@ -184,6 +184,16 @@ impl LiveKdTree {
         t
     }
 
+    /// Replaces every entry's item `i` by `map(i)`, keeping the tree's shape (the points
+    /// decide it). `map` must not send two items to one.
+    pub(crate) fn map_items(&mut self, mut map: impl FnMut(u32) -> u32) {
+        for leaf in &mut self.leaves {
+            for item in &mut leaf.items[..leaf.len as usize] {
+                *item = map(*item);
+            }
+        }
+    }
+
     /// Number of entries.
     pub fn len(&self) -> usize {
         self.len
