@@ -4,6 +4,9 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use ygg_store::query::{self, Direction};
+use ygg_store::snapshot::{
+    ArchivedScene, Manifest, SegmentBytes, archive, validate_layer, validate_manifest,
+};
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
 /// A small but complete scene: every column of the layout is non-empty.
@@ -171,4 +174,46 @@ fn thousands_of_random_corruptions_never_panic() {
         opened > 100 && refused > 100,
         "opened {opened}, refused {refused}"
     );
+}
+
+/// Checks the cut of `manifest` (tampered by the caller) with `g`'s layer segments, as a
+/// reader does: bytecheck of every segment, then `ArchivedScene::new`.
+fn check_cut(g: &SceneGraph, manifest: &Manifest) -> Result<(), String> {
+    let layers: Vec<SegmentBytes> = g.layers().map(|l| archive(&g.layer_segment(l))).collect();
+    let manifest = archive(manifest);
+    let manifest = validate_manifest(&manifest, "manifest").map_err(|e| e.to_string())?;
+    let layers = layers
+        .iter()
+        .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    ArchivedScene::new(manifest, layers).map(|_| ())
+}
+
+#[test]
+fn inconsistent_manifests_are_refused_naming_what_is_wrong() {
+    let g = sample_scene();
+    check_cut(&g, &g.manifest(1)).expect("the intact cut is accepted");
+
+    let mut m = g.manifest(1);
+    m.label_layers.insert("chair".into(), vec![99]);
+    let e = check_cut(&g, &m).unwrap_err();
+    assert!(e.contains("graph index names an unknown layer"), "{e}");
+
+    let mut m = g.manifest(1);
+    m.layers[0].children.push(99);
+    let e = check_cut(&g, &m).unwrap_err();
+    assert!(e.contains("DAG edge to an unknown layer"), "{e}");
+
+    let mut m = g.manifest(1);
+    let last = m.layers[2].children.clone();
+    m.layers[2].children = m.layers[1].children.clone();
+    m.layers[1].children = last;
+    let e = check_cut(&g, &m).unwrap_err();
+    assert!(e.contains("is not mirrored"), "{e}");
+
+    // Layers out of order: refused before any id is looked up by binary search.
+    let mut m = g.manifest(1);
+    m.layers.swap(0, 1);
+    let e = check_cut(&g, &m).unwrap_err();
+    assert!(e.contains("does not match segment"), "{e}");
 }

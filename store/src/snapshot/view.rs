@@ -1,7 +1,7 @@
 //! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
 
 use super::schema::{ArchivedLayerSegment, ArchivedManifest, NO_PARENT, u32s, u64s};
-use super::validate::check_dag;
+use super::validate::{check_dag, layer_position};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
 use crate::view::{EdgeRef, SceneView};
@@ -59,10 +59,11 @@ impl<'a> ArchivedScene<'a> {
                 return Err("manifest layers are not ascending".into());
             }
         }
+        // Ascending (checked above): each id is found by binary search.
         let known = |ids: &ArchivedVec<rkyv::rend::u32_le>| {
             u32s(ids)
                 .iter()
-                .all(|id| manifest.layers.iter().any(|m| m.id == *id))
+                .all(|&id| layer_position(manifest, id).is_some())
         };
         for m in manifest.layers.iter() {
             if !known(&m.parents) || !known(&m.children) {
