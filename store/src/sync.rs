@@ -80,7 +80,7 @@ impl SceneGraph {
     /// None for a `target` that holds the store's invariants (every `SceneGraph` does);
     /// an error would mean a bug, and leaves this graph partly synced (still valid).
     pub fn sync_to(&mut self, target: &SceneGraph) -> EditResult<SyncReport> {
-        self.sync(target, &target.indexes, None)
+        self.sync(target, &IndexSet::of(&target.indexes), None)
     }
 
     /// [`Self::sync_to`], taking `target`: an index whose points change much here (a
@@ -93,28 +93,16 @@ impl SceneGraph {
     /// As [`Self::sync_to`].
     pub fn sync_to_owned(&mut self, mut target: SceneGraph) -> EditResult<SyncReport> {
         let indexes = std::mem::take(&mut target.indexes);
-        let wanted = LiveIndexes {
-            layers: indexes
-                .layers
-                .keys()
-                .map(|&l| (l, OverlaidTree::default()))
-                .collect(),
-            nodes: indexes
-                .nodes
-                .keys()
-                .map(|&n| (n, OverlaidTree::default()))
-                .collect(),
-            ..LiveIndexes::default()
-        };
+        let wanted = IndexSet::of(&indexes);
         self.sync(&target, &wanted, Some(AdoptedTrees::new(indexes)))
     }
 
-    /// [`Self::sync_to`] with the target's indexes `wanted` (their trees unused), and its
-    /// trees to adopt, if given.
+    /// [`Self::sync_to`] with the indexes the target has (`wanted`), and its trees to
+    /// adopt, if given.
     fn sync(
         &mut self,
         target: &SceneGraph,
-        wanted: &LiveIndexes,
+        wanted: &IndexSet,
         mut adopted: Option<AdoptedTrees>,
     ) -> EditResult<SyncReport> {
         let mut report = SyncReport::default();
@@ -142,7 +130,7 @@ impl SceneGraph {
         let layer_indexes: Vec<LayerId> = self.indexes.layers.keys().copied().collect();
         for l in layer_indexes {
             let keep = target_layer_of(&self.layers[&l].name)
-                .is_some_and(|tl| wanted.layers.contains_key(&tl));
+                .is_some_and(|tl| wanted.layers.contains(&tl));
             if !keep {
                 self.disable_layer_index(l)?;
                 report.indexes_changed += 1;
@@ -150,7 +138,7 @@ impl SceneGraph {
         }
         let node_indexes: Vec<NodeId> = self.indexes.nodes.keys().copied().collect();
         for n in node_indexes {
-            if !wanted.nodes.contains_key(&n) {
+            if !wanted.roots.contains(&n) {
                 self.disable_node_index(n)?;
                 report.indexes_changed += 1;
             }
@@ -316,7 +304,7 @@ impl SceneGraph {
     fn indexes_to_replace(
         &self,
         target: &SceneGraph,
-        wanted: &LiveIndexes,
+        wanted: &IndexSet,
         map: &FxHashMap<LayerId, LayerId>,
     ) -> ReplacedIndexes {
         let mut in_layers: FxHashMap<LayerId, usize> = FxHashMap::default();
@@ -351,7 +339,7 @@ impl SceneGraph {
         };
         let mut layers: Vec<(LayerId, LayerId, bool)> = wanted
             .layers
-            .keys()
+            .iter()
             .filter_map(|tl| {
                 let l = map[tl];
                 let tree = self.indexes.layers.get(&l);
@@ -361,8 +349,8 @@ impl SceneGraph {
             .collect();
         layers.sort_unstable();
         let mut roots: Vec<(NodeId, bool)> = wanted
-            .nodes
-            .keys()
+            .roots
+            .iter()
             .filter_map(|&n| {
                 let tree = self.indexes.nodes.get(&n);
                 let changes = in_roots.get(&n).copied().unwrap_or(0);
@@ -488,6 +476,22 @@ impl SceneGraph {
             changed = true;
         }
         Ok(changed)
+    }
+}
+
+/// Which indexes a graph has: its layer indexes (by layer) and node indexes (by root).
+struct IndexSet {
+    layers: FxHashSet<LayerId>,
+    roots: FxHashSet<NodeId>,
+}
+
+impl IndexSet {
+    /// The indexes of `indexes`.
+    fn of(indexes: &LiveIndexes) -> Self {
+        IndexSet {
+            layers: indexes.layers.keys().copied().collect(),
+            roots: indexes.nodes.keys().copied().collect(),
+        }
     }
 }
 
