@@ -1,9 +1,11 @@
 //! The bridge's work on a full-office message after decoding (`ygg-writer bridge-zmq`, the
 //! build path): the message's graph built in the mint layout, then the live graph brought
-//! to equal it with `SceneGraph::sync_to`. Two messages: the whole office translated by a
-//! centimetre (every node and mesh vertex moved, the layers kept), and the office arriving
-//! after a one-room graph (every layer new). Each benchmark times one phase; the other
-//! is done outside the timing in every iteration, so both see the same graphs.
+//! to equal it with `SceneGraph::sync_to` (the target borrowed: indexes it changes much are
+//! rebuilt) or `sync_to_owned` (the target taken: its trees are adopted, as the bridge
+//! does). Two messages: the whole office translated by a centimetre (every node and mesh
+//! vertex moved, the layers kept), and the office arriving after a small office (most
+//! layers new). Each benchmark times one step; the copies of the live graph (and of the
+//! target, when taken) are made outside the timing in every iteration.
 #![expect(clippy::unwrap_used, reason = "acceptable in benchmarks")]
 #![allow(missing_docs, reason = "criterion macros generate undocumented items")]
 
