@@ -25,14 +25,31 @@ use crate::{LayerId, NodeId, Point, SceneGraph};
 /// handles of those nodes here, found as the trees are adopted.
 pub(crate) struct AdoptedTrees {
     /// The other graph's trees (taken out one by one).
-    pub(crate) trees: LiveIndexes,
+    trees: LiveIndexes,
     /// `trees.ids`, the node of each of the other graph's handles.
     ids: Vec<NodeId>,
     /// This graph's handle for each of the other graph's handles (`NO_HANDLE`: not yet).
     mapped: Vec<u32>,
 }
 
+/// One index of a graph: a layer's, or the one rooted at a node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum IndexScope {
+    /// The layer index of this layer.
+    Layer(LayerId),
+    /// The node index rooted at this node.
+    Root(NodeId),
+}
+
 impl AdoptedTrees {
+    /// The other graph's tree of `index` (named by that graph's ids), taken out.
+    pub(crate) fn take(&mut self, index: IndexScope) -> Option<OverlaidTree> {
+        match index {
+            IndexScope::Layer(l) => self.trees.layers.remove(&l),
+            IndexScope::Root(r) => self.trees.nodes.remove(&r),
+        }
+    }
+
     /// Takes over the index trees of another graph.
     pub(crate) fn new(mut trees: LiveIndexes) -> Self {
         let ids = std::mem::take(&mut trees.ids);
@@ -165,62 +182,52 @@ impl SceneGraph {
         OverlaidTree::from_entries(entries)
     }
 
-    /// Takes the layer index of `layer` and the node indexes rooted at `roots` out of
-    /// upkeep, for an edit that changes much of them: mutations skip them until
-    /// [`Self::restore_layer_index`] and [`Self::restore_node_index`] put them back (built
-    /// again, or adopted). Nothing is journaled: the edits journal their own changes.
-    pub(crate) fn suspend_indexes(&mut self, layers: &[LayerId], roots: &[NodeId]) {
-        for l in layers {
-            self.indexes.layers.remove(l);
-        }
-        for r in roots {
-            self.indexes.nodes.remove(r);
-        }
-    }
-
-    /// Puts back the layer index of `layer` (which exists), suspended or new: `adopted`
-    /// (a tree over exactly the layer's points from another graph, see
-    /// [`AdoptedTrees`]), else a tree built from the layer. A new index is journaled as
-    /// [`Self::enable_layer_index`] journals it; a suspended one needs nothing more (the
-    /// point changes are journaled).
-    pub(crate) fn restore_layer_index(
-        &mut self,
-        layer: LayerId,
-        new: bool,
-        adopted: Option<(OverlaidTree, &mut AdoptedTrees)>,
-    ) {
-        let tree = match adopted {
-            Some((tree, from)) => self.adopt(tree, from),
-            None => self.layer_tree(layer),
-        };
-        self.indexes.layers.insert(layer, tree);
-        if new {
-            self.touch_layer(layer, Change::All);
+    /// Takes `indexes` out of upkeep, for an edit that changes much of them: mutations
+    /// skip them until [`Self::restore_index`] puts them back (built again, or adopted).
+    /// Nothing is journaled: the edits journal their own changes.
+    pub(crate) fn suspend_indexes(&mut self, indexes: impl IntoIterator<Item = IndexScope>) {
+        for index in indexes {
+            match index {
+                IndexScope::Layer(l) => self.indexes.layers.remove(&l),
+                IndexScope::Root(r) => self.indexes.nodes.remove(&r),
+            };
         }
     }
 
-    /// [`Self::restore_layer_index`] for the node index rooted at `root` (which exists):
-    /// `adopted` holds exactly the points of `root`'s sub-tree.
-    pub(crate) fn restore_node_index(
+    /// Puts back `index` (whose layer or root exists), suspended or new: `adopted` (a tree
+    /// over exactly its points from another graph, see [`AdoptedTrees`]), else a tree
+    /// built here. A new index is journaled as enabling it journals it; a suspended layer
+    /// index needs nothing more (the point changes are journaled), a suspended node index
+    /// its root's change.
+    pub(crate) fn restore_index(
         &mut self,
-        root: NodeId,
+        index: IndexScope,
         new: bool,
         adopted: Option<(OverlaidTree, &mut AdoptedTrees)>,
     ) {
-        let tree = match adopted {
-            Some((tree, from)) => self.adopt(tree, from),
-            None => self.node_tree(root),
+        let tree = match (adopted, index) {
+            (Some((tree, from)), _) => self.adopt(tree, from),
+            (None, IndexScope::Layer(l)) => self.layer_tree(l),
+            (None, IndexScope::Root(r)) => self.node_tree(r),
         };
-        self.indexes.nodes.insert(root, tree);
-        let layer = self.nodes[&root].layer;
-        self.touch_layer(
-            layer,
-            if new {
-                Change::All
-            } else {
-                Change::IndexRoot(root)
-            },
-        );
+        let (layer, change) = match index {
+            IndexScope::Layer(l) => {
+                self.indexes.layers.insert(l, tree);
+                (l, new.then_some(Change::All))
+            }
+            IndexScope::Root(r) => {
+                self.indexes.nodes.insert(r, tree);
+                let change = if new {
+                    Change::All
+                } else {
+                    Change::IndexRoot(r)
+                };
+                (self.nodes[&r].layer, Some(change))
+            }
+        };
+        if let Some(change) = change {
+            self.touch_layer(layer, change);
+        }
     }
 
     /// `tree`, built by another graph, with its items remapped to this graph's handles

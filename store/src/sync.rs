@@ -12,7 +12,7 @@
 
 use crate::feature::StoredValue;
 use crate::graph::Node;
-use crate::graph_indexes::AdoptedTrees;
+use crate::graph_indexes::{AdoptedTrees, IndexScope};
 use crate::index::{LiveIndexes, OverlaidTree};
 use crate::{EditResult, FeatureValue, LayerId, NodeId, SceneGraph};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -250,11 +250,7 @@ impl SceneGraph {
         // 8. Content: geometry, features, labels, edges, nesting, boxes; the indexes that
         // are new, or that it changes by a quarter or more, are out of upkeep meanwhile.
         let replaced = self.indexes_to_replace(target, wanted, &map);
-        let (layers, roots): (Vec<LayerId>, Vec<NodeId>) = (
-            replaced.layers.iter().map(|r| r.0).collect(),
-            replaced.roots.iter().map(|r| r.0).collect(),
-        );
-        self.suspend_indexes(&layers, &roots);
+        self.suspend_indexes(replaced.iter().map(|r| r.index));
         for tl in target.layers.values() {
             for &id in &tl.nodes {
                 if self.sync_node(target, &target.nodes[&id])? {
@@ -264,21 +260,12 @@ impl SceneGraph {
         }
 
         // 9. The indexes replaced: the target's trees adopted, else built here.
-        for (l, tl, new) in replaced.layers {
-            let tree = adopted.as_mut().and_then(|a| {
-                let tree = a.trees.layers.remove(&tl)?;
-                Some((tree, a))
-            });
-            self.restore_layer_index(l, new, tree);
-            report.indexes_changed += usize::from(new);
-        }
-        for (n, new) in replaced.roots {
-            let tree = adopted.as_mut().and_then(|a| {
-                let tree = a.trees.nodes.remove(&n)?;
-                Some((tree, a))
-            });
-            self.restore_node_index(n, new, tree);
-            report.indexes_changed += usize::from(new);
+        for r in replaced {
+            let tree = adopted
+                .as_mut()
+                .and_then(|a| Some((a.take(r.in_target)?, a)));
+            self.restore_index(r.index, r.new, tree);
+            report.indexes_changed += usize::from(r.new);
         }
 
         // Nodes added in step 7 are counted there, not as changed.
@@ -306,7 +293,7 @@ impl SceneGraph {
         target: &SceneGraph,
         wanted: &IndexSet,
         map: &FxHashMap<LayerId, LayerId>,
-    ) -> ReplacedIndexes {
+    ) -> Vec<ReplacedIndex> {
         let mut in_layers: FxHashMap<LayerId, usize> = FxHashMap::default();
         let mut in_roots: FxHashMap<NodeId, usize> = FxHashMap::default();
         for tl in target.layers.values() {
@@ -337,28 +324,31 @@ impl SceneGraph {
         let heavy = |tree: Option<&OverlaidTree>, changes: usize| {
             tree.is_some_and(|t| changes > 0 && 4 * changes >= t.len())
         };
-        let mut layers: Vec<(LayerId, LayerId, bool)> = wanted
+        let mut replaced: Vec<ReplacedIndex> = wanted
             .layers
             .iter()
             .filter_map(|tl| {
                 let l = map[tl];
                 let tree = self.indexes.layers.get(&l);
                 let changes = in_layers.get(&l).copied().unwrap_or(0);
-                (tree.is_none() || heavy(tree, changes)).then_some((l, *tl, tree.is_none()))
+                (tree.is_none() || heavy(tree, changes)).then_some(ReplacedIndex {
+                    index: IndexScope::Layer(l),
+                    in_target: IndexScope::Layer(*tl),
+                    new: tree.is_none(),
+                })
             })
             .collect();
-        layers.sort_unstable();
-        let mut roots: Vec<(NodeId, bool)> = wanted
-            .roots
-            .iter()
-            .filter_map(|&n| {
-                let tree = self.indexes.nodes.get(&n);
-                let changes = in_roots.get(&n).copied().unwrap_or(0);
-                (tree.is_none() || heavy(tree, changes)).then_some((n, tree.is_none()))
+        replaced.extend(wanted.roots.iter().filter_map(|&n| {
+            let tree = self.indexes.nodes.get(&n);
+            let changes = in_roots.get(&n).copied().unwrap_or(0);
+            (tree.is_none() || heavy(tree, changes)).then_some(ReplacedIndex {
+                index: IndexScope::Root(n),
+                in_target: IndexScope::Root(n),
+                new: tree.is_none(),
             })
-            .collect();
-        roots.sort_unstable();
-        ReplacedIndexes { layers, roots }
+        }));
+        replaced.sort_unstable_by_key(|r| r.index);
+        replaced
     }
 
     /// Points in `root`'s sub-tree (`root` included).
@@ -495,12 +485,14 @@ impl IndexSet {
     }
 }
 
-/// The indexes [`SceneGraph::sync`] replaces rather than patches.
-struct ReplacedIndexes {
-    /// Layer indexes: this graph's layer, the target's, and whether the index is new.
-    layers: Vec<(LayerId, LayerId, bool)>,
-    /// Node indexes, by root, and whether the index is new.
-    roots: Vec<(NodeId, bool)>,
+/// An index [`SceneGraph::sync`] replaces rather than patches.
+struct ReplacedIndex {
+    /// The index here.
+    index: IndexScope,
+    /// The same index in the target (its layer id may differ).
+    in_target: IndexScope,
+    /// Whether this graph lacks it.
+    new: bool,
 }
 
 /// Whether two point lists are equal bit for bit.
