@@ -13,9 +13,11 @@ use crate::errors::{FfiError, FfiResult, YggStatus, guard};
 use crate::graph::graph_arg;
 use crate::handle::{self, Handle, Kind};
 use crate::lists::YggNodeList;
+use std::collections::HashMap;
 use std::ffi::c_char;
+use std::sync::Mutex;
 use ygg_reader::SceneSnapshot;
-use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, SceneView, SnapshotFile};
+use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, Point, SceneView, SnapshotFile};
 
 /// A validated snapshot of a scene.
 ///
@@ -23,6 +25,10 @@ use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, SceneView, SnapshotF
 /// when no thread uses it (pointers its accessors returned die with it).
 pub struct YggSnapshot {
     source: SnapshotSource,
+    /// Points of nodes that lie in two or more chunks of a chunked layer, copied into
+    /// one piece on first request and kept for the handle's life (so the pointer
+    /// `ygg_snapshot_node_points` hands out stays valid as long as the snapshot).
+    joined_points: Mutex<HashMap<u64, Box<[Point]>>>,
 }
 
 /// Where a snapshot's bytes live.
@@ -47,8 +53,13 @@ const _: fn() = || {
 impl YggSnapshot {
     /// A snapshot a reader received.
     pub(crate) fn live(snapshot: SceneSnapshot) -> Self {
+        YggSnapshot::new(SnapshotSource::Live(snapshot))
+    }
+
+    fn new(source: SnapshotSource) -> Self {
         YggSnapshot {
-            source: SnapshotSource::Live(snapshot),
+            source,
+            joined_points: Mutex::default(),
         }
     }
 
@@ -156,9 +167,7 @@ pub unsafe extern "C" fn ygg_snapshot_open_file(
         // SAFETY: the caller's contract for `path` and `out`.
         let (path, out) = unsafe { (str_arg(path, "path")?, Out::new(out, "out")?) };
         let file = SnapshotFile::open(path).map_err(FfiError::wrap(YggStatus::Io, "open"))?;
-        out.write(handle::register(YggSnapshot {
-            source: SnapshotSource::File(file),
-        }));
+        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(file))));
         Ok(())
     })
 }
@@ -179,9 +188,7 @@ pub unsafe extern "C" fn ygg_graph_snapshot(
         // SAFETY: the caller's contract for `out`.
         let out = unsafe { Out::new(out, "out") }?;
         let file = graph_arg(graph)?.to_snapshot();
-        out.write(handle::register(YggSnapshot {
-            source: SnapshotSource::File(file),
-        }));
+        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(file))));
         Ok(())
     })
 }
@@ -307,8 +314,10 @@ pub unsafe extern "C" fn ygg_snapshot_node_layer(
     })
 }
 
-/// A node's geometry, zero-copy: `*xyz` points to `3 * *count` floats (x y z of each
-/// point) in the snapshot's bytes, null when the node has no points.
+/// A node's geometry: `*xyz` points to `3 * *count` floats (x y z of each point), null
+/// when the node has no points. Zero-copy (the snapshot's bytes) unless the node's points
+/// cross a chunk boundary of a chunked layer (a mesh node of more than 8192 points): then
+/// a copy in one piece, made once and owned by the snapshot.
 ///
 /// Ownership: the points belong to the snapshot: valid while the snapshot handle lives;
 /// do not free or write them.
@@ -325,13 +334,28 @@ pub unsafe extern "C" fn ygg_snapshot_node_points(
     guard("ygg_snapshot_node_points", || {
         // SAFETY: the caller's contract for `xyz` and `count`.
         let (xyz, count) = unsafe { (Out::new(xyz, "xyz")?, Out::new(count, "count")?) };
-        let view = view_arg(snapshot)?;
+        let handle = handle::resolve(snapshot, "snapshot")?;
+        let view = handle.view();
         let points = view.points(node_arg(&view, node)?);
-        // The slice lies in the snapshot's segment bytes, which the handle keeps mapped.
+        let first = match points.as_slice() {
+            // The slice lies in the snapshot's segment bytes, which the handle keeps mapped.
+            Some(one) => one.as_ptr(),
+            None => {
+                let mut joined = handle
+                    .joined_points
+                    .lock()
+                    .unwrap_or_else(|poisoned| poisoned.into_inner());
+                // The boxed copy lives, unmoved, as long as the handle.
+                joined
+                    .entry(node)
+                    .or_insert_with(|| points.to_vec().into_boxed_slice())
+                    .as_ptr()
+            }
+        };
         xyz.write(if points.is_empty() {
             std::ptr::null()
         } else {
-            points.as_ptr().cast()
+            first.cast()
         });
         count.write(points.len());
         Ok(())

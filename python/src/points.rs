@@ -1,4 +1,5 @@
-//! Zero-copy numpy views of a node's points.
+//! Zero-copy numpy views of a node's points (a copy for the rare node whose points cross
+//! a chunk boundary of a chunked layer).
 
 #![allow(
     unsafe_code,
@@ -14,7 +15,9 @@ use crate::errors::unknown_node;
 use crate::scene::Scene;
 
 /// A read-only `(n, 3)` `float32` array over node `id`'s points in `scene`'s snapshot,
-/// whose numpy base is the `Scene` object: the snapshot stays mapped while it lives.
+/// whose numpy base is the `Scene` object: the snapshot stays mapped while it lives. A
+/// node whose points lie in several chunks of a chunked layer (a mesh node of more than
+/// 8192 points) gets a read-only copy instead.
 pub fn points_array<'py>(
     scene: &Bound<'py, Scene>,
     id: NodeId,
@@ -22,6 +25,14 @@ pub fn points_array<'py>(
     let view = scene.get().snapshot().view();
     let node = view.node(id).ok_or_else(|| unknown_node(id.0))?;
     let points = view.points(node);
+    let Some(points) = points.as_slice() else {
+        let copy = PyArray2::from_vec2(
+            scene.py(),
+            &points.iter().map(|p| p.to_vec()).collect::<Vec<_>>(),
+        )?;
+        copy.readwrite().make_nonwriteable();
+        return Ok(copy);
+    };
     let flat: &[f32] = points.as_flattened();
     let array = ArrayView2::from_shape((points.len(), 3), flat)
         .expect("a slice of [f32; 3] has exactly 3 columns");

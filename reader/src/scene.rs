@@ -24,8 +24,8 @@ use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, layer_unchecked, manifest_unchecked, validate_layer,
-    validate_manifest,
+    ArchivedScene, SegmentBytes, chunk_unchecked, is_chunk_segment_id, layer_unchecked,
+    manifest_unchecked, validate_chunk, validate_layer, validate_manifest,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -69,7 +69,8 @@ struct PrivateCut {
 }
 
 impl SceneSnapshot {
-    /// The bytes queried: the manifest's and each layer's, in `Snapshot::layers` order.
+    /// The bytes queried: the manifest's and each segment's (layers, then point chunks),
+    /// in `Snapshot::layers` order.
     fn bytes(&self) -> (&[u8], Vec<&[u8]>) {
         match &self.private {
             Some(p) => (&p.manifest, p.layers.iter().map(|l| &l[..]).collect()),
@@ -78,6 +79,15 @@ impl SceneSnapshot {
                 self.inner.layers().map(|(_, b)| b).collect(),
             ),
         }
+    }
+
+    /// How many of the snapshot's segments are layers: the rest, sorted after them by
+    /// segment id, are point chunks.
+    fn layer_count(&self) -> usize {
+        self.inner
+            .layers()
+            .take_while(|(entry, _)| !is_chunk_segment_id(entry.layer_id))
+            .count()
     }
 }
 
@@ -88,17 +98,23 @@ impl SceneSnapshot {
         // manifest bytes and every layer's bytes of `self.inner` passed
         // `validate_manifest` / `validate_layer` (cached per identical address, length and
         // identity). `self.inner` keeps those exact samples mapped and unchanged.
-        let (manifest, layers) = self.bytes();
+        let (manifest, segments) = self.bytes();
         // SAFETY: see above; in copy mode the bytes are the private copies that were
         // validated, which nothing but this reader can reach.
         let manifest = unsafe { manifest_unchecked(manifest) };
+        let (layers, chunks) = segments.split_at(self.layer_count());
         let layers = layers
-            .into_iter()
+            .iter()
             // SAFETY: as above, each layer's bytes were validated before `accept` returned.
             .map(|bytes| unsafe { layer_unchecked(bytes) })
             .collect();
+        let chunks = chunks
+            .iter()
+            // SAFETY: as above, each chunk's bytes passed `validate_chunk`.
+            .map(|bytes| unsafe { chunk_unchecked(bytes) })
+            .collect();
         // `accept` ran `ArchivedScene::new` on this cut.
-        ArchivedScene::new_prechecked(manifest, layers)
+        ArchivedScene::new_prechecked(manifest, layers, chunks)
     }
 
     /// The snapshot generation.
@@ -236,8 +252,8 @@ impl SceneReader {
         self.subscriber.scene()
     }
 
-    /// How many layer segments this reader has validated so far (unchanged layers are
-    /// not validated again).
+    /// How many segments (layers and point chunks) this reader has validated so far
+    /// (unchanged ones are not validated again).
     pub fn validations(&self) -> u64 {
         self.validations
     }
@@ -271,28 +287,50 @@ impl SceneReader {
             generation: snap.generation(),
             source,
         };
-        let (manifest, layer_bytes) = accepted.bytes();
+        let (manifest, segment_bytes) = accepted.bytes();
         let manifest = validate_manifest(manifest, "manifest").map_err(invalid)?;
         let mut layers = Vec::with_capacity(snap.layer_count());
+        let mut chunks = Vec::new();
         let mut newly = Vec::new();
-        for ((entry, _), bytes) in snap.layers().zip(layer_bytes) {
+        for ((entry, _), bytes) in snap.layers().zip(segment_bytes) {
             let identity = (
                 snap.session(),
                 entry.generation,
                 bytes.as_ptr() as usize,
                 bytes.len(),
             );
-            if self.validated.get(&entry.layer_id) == Some(&identity) {
-                // SAFETY: these exact bytes (same address, length and identity) passed
-                // `validate_layer` earlier, and the transport never changes a published sample.
-                layers.push(unsafe { layer_unchecked(bytes) });
+            let known = self.validated.get(&entry.layer_id) == Some(&identity);
+            let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
+            if is_chunk_segment_id(entry.layer_id) {
+                chunks.push(if known {
+                    // SAFETY: these exact bytes (same address, length and identity) passed
+                    // `validate_chunk` earlier, and the transport never changes a
+                    // published sample.
+                    unsafe { chunk_unchecked(bytes) }
+                } else {
+                    validate_chunk(bytes, &what()).map_err(invalid)?
+                });
+            } else if !chunks.is_empty() {
+                // Entries are sorted by id, so layers come first: the writer broke that.
+                return Err(invalid(SnapshotError::Inconsistent {
+                    what: what(),
+                    reason: "a layer segment listed after point chunks".into(),
+                }));
             } else {
-                let what = format!("layer {} generation {}", entry.layer_id, entry.generation);
-                layers.push(validate_layer(bytes, &what).map_err(invalid)?);
+                layers.push(if known {
+                    // SAFETY: these exact bytes (same address, length and identity) passed
+                    // `validate_layer` earlier, and the transport never changes a
+                    // published sample.
+                    unsafe { layer_unchecked(bytes) }
+                } else {
+                    validate_layer(bytes, &what()).map_err(invalid)?
+                });
+            }
+            if !known {
                 newly.push((entry.layer_id, identity));
             }
         }
-        ArchivedScene::new(manifest, layers).map_err(|reason| {
+        ArchivedScene::new(manifest, layers, chunks).map_err(|reason| {
             invalid(SnapshotError::Inconsistent {
                 what: "snapshot".into(),
                 reason,

@@ -6,7 +6,9 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use ygg_store::snapshot::{SegmentBytes, validate_layer, validate_manifest};
+use ygg_store::snapshot::{
+    SegmentBytes, is_chunk_segment_id, validate_chunk, validate_layer, validate_manifest,
+};
 use ygg_transport::ManifestEntry;
 use ygg_transport::protocol::decode_manifest_prefix;
 
@@ -63,8 +65,8 @@ impl Assembler {
         Self::default()
     }
 
-    /// Validates a segment (the store's `validate_layer`, what a local reader runs) and
-    /// keeps it.
+    /// Validates a segment (the store's `validate_layer`, or `validate_chunk` for a point
+    /// chunk: what a local reader runs) and keeps it.
     ///
     /// # Errors
     /// Why the bytes are not a valid segment; nothing is kept then.
@@ -79,7 +81,11 @@ impl Assembler {
             return Ok(());
         }
         let what = format!("segment {id} generation {generation}");
-        validate_layer(&bytes, &what).map_err(|e| e.to_string())?;
+        if is_chunk_segment_id(id) {
+            validate_chunk(&bytes, &what).map_err(|e| e.to_string())?;
+        } else {
+            validate_layer(&bytes, &what).map_err(|e| e.to_string())?;
+        }
         self.segments
             .insert((session, id, generation), Arc::new(bytes));
         // Bound what a stream of segments without manifests can hold.

@@ -4,7 +4,7 @@ use crate::feature::StoredValue;
 use crate::graph::{Node, SceneGraph};
 use crate::index::SpatialIndex;
 use crate::view::{EdgeRef, SceneView};
-use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
+use crate::{Aabb, FeatureRef, LayerId, NodeId, Points};
 
 impl SceneGraph {
     fn value_ref(&self, v: &StoredValue) -> FeatureRef<'_> {
@@ -75,8 +75,8 @@ impl SceneView for SceneGraph {
         node.layer
     }
 
-    fn points<'a>(&'a self, node: &'a Node) -> &'a [Point] {
-        &node.points
+    fn points<'a>(&'a self, node: &'a Node) -> Points<'a> {
+        Points::from(&node.points[..])
     }
 
     fn parent<'a>(&'a self, node: &'a Node) -> Option<NodeId> {

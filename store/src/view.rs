@@ -14,7 +14,7 @@
 //! spatial queries use it when present and scan otherwise.
 
 use crate::index::SpatialIndex;
-use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
+use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, Points};
 
 /// A directed edge as a view reports it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -60,7 +60,7 @@ pub trait SceneView {
     /// A node's layer.
     fn node_layer<'a>(&'a self, node: Self::NodeRef<'a>) -> LayerId;
     /// A node's geometry (empty if none).
-    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [Point];
+    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> Points<'a>;
     /// A node's parent.
     fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId>;
     /// A node's children, ascending by id.
@@ -188,7 +188,7 @@ impl<V: SceneView + ?Sized> SceneView for &V {
     fn node_layer<'a>(&'a self, node: Self::NodeRef<'a>) -> LayerId {
         (**self).node_layer(node)
     }
-    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [Point] {
+    fn points<'a>(&'a self, node: Self::NodeRef<'a>) -> Points<'a> {
         (**self).points(node)
     }
     fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId> {

@@ -186,7 +186,7 @@ fn check_cut(g: &SceneGraph, manifest: &Manifest) -> Result<(), String> {
         .iter()
         .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    ArchivedScene::new(manifest, layers).map(|_| ())
+    ArchivedScene::new(manifest, layers, Vec::new()).map(|_| ())
 }
 
 #[test]

@@ -387,7 +387,7 @@ fn check_published(g: &mut SceneGraph, segments: &mut SegmentCache, probes: &[Pr
         .iter()
         .map(|l| validate_layer(l, "layer").unwrap())
         .collect();
-    let view = ArchivedScene::new(manifest, layers).unwrap();
+    let view = ArchivedScene::new(manifest, layers, Vec::new()).unwrap();
     check_view(&view, probes);
     for l in g.layers() {
         assert_eq!(

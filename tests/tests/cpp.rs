@@ -113,7 +113,7 @@ fn cpp_writer_is_read_by_a_rust_reader_and_the_ygg_reader_cli() {
             .layer_nodes(agents)
             .max_by_key(|&n| view.node_id(n))
             .expect("a pose");
-        let p = view.points(pose)[0];
+        let p = *view.points(pose).first().expect("a pose has a point");
         assert_eq!((p[1], p[2]), (4.0, 1.0), "pose off the corridor");
         assert_eq!(view.parent(pose), Some(room_at(p[0])));
     }

@@ -4,8 +4,8 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
-use ygg_store::snapshot::SegmentCache;
-use ygg_store::{SceneGraph, SceneView};
+use ygg_store::snapshot::{MAX_LAYER_ID, SegmentCache};
+use ygg_store::{LayerId, SceneGraph, SceneView};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
 
@@ -16,9 +16,11 @@ pub struct PublishReport {
     pub generation: u64,
     /// Layers whose segment was (re)published.
     pub layers_sent: usize,
+    /// Point chunks of chunked layers (re)published: those whose points changed.
+    pub chunks_sent: usize,
     /// Layers left as they were.
     pub layers_unchanged: usize,
-    /// Bytes archived into shared memory (layer segments and manifest).
+    /// Bytes archived into shared memory (layer segments, point chunks and manifest).
     pub bytes_sent: usize,
 }
 
@@ -41,7 +43,8 @@ pub struct SceneWriter {
     /// The segments and manifest last published, rebuilt incrementally.
     segments: SegmentCache,
     publisher: SegmentPublisher,
-    published_layers: BTreeSet<u32>,
+    /// Ids of the segments (layers and point chunks) of the last published cut.
+    published_segments: BTreeSet<u32>,
     generation: u64,
 }
 
@@ -124,12 +127,12 @@ impl SceneWriterBuilder {
     pub fn create(self, graph: SceneGraph) -> Result<SceneWriter, WriterCreateError> {
         let max_layers = self
             .max_layers
-            .unwrap_or_else(|| default_max_layers(graph.layers().count()));
+            .unwrap_or_else(|| default_max_layers(graph.snapshot_segments()));
         Ok(SceneWriter {
             graph,
             segments: SegmentCache::new(),
             publisher: self.publisher.max_segments(max_layers).create()?,
-            published_layers: BTreeSet::new(),
+            published_segments: BTreeSet::new(),
             generation: 0,
         })
     }
@@ -184,27 +187,65 @@ impl SceneWriter {
     /// the current one for readers.
     pub fn publish(&mut self) -> Result<PublishReport, PublishError> {
         let layers: Vec<_> = self.graph.layers().collect();
-        if layers.len() > self.max_layers() {
+        if let Some(layer) = layers.iter().find(|l| l.0 > MAX_LAYER_ID) {
+            return Err(PublishError::LayerIdTooLarge {
+                layer_id: layer.0,
+                max: MAX_LAYER_ID,
+            });
+        }
+        // Changed layers are brought up to date first, so that the cut's segments are
+        // counted (a layer's point chunks may have grown) before any goes out.
+        let changed: Vec<_> = layers
+            .iter()
+            .filter(|l| {
+                let generation = self.graph.layer_generation(**l).expect("listed layer");
+                self.publisher.layer_generation(l.0) != Some(generation)
+            })
+            .copied()
+            .collect();
+        for layer in &changed {
+            self.segments.published_layer(&mut self.graph, *layer);
+        }
+        let chunks = |l: &LayerId| {
+            self.segments
+                .published(*l)
+                .map_or(0, |p| p.segment.point_chunks.len())
+        };
+        let segments = layers.len() + layers.iter().map(chunks).sum::<usize>();
+        if segments > self.max_layers() {
             // Refused before any segment goes out, so readers see nothing of this cut.
             return Err(PublishError::TooManyLayers {
-                count: layers.len(),
+                count: segments,
                 max: self.max_layers(),
             });
         }
         self.publisher.start_cut();
         let mut report = PublishReport::default();
-        let mut entries = Vec::new();
+        let mut entries = Vec::with_capacity(segments);
         for layer in &layers {
             let generation = self.graph.layer_generation(*layer).expect("listed layer");
-            if self.publisher.layer_generation(layer.0) != Some(generation) {
-                let segment = self.segments.layer_segment(&mut self.graph, *layer);
-                let len = segment.archived_len();
+            if changed.binary_search(layer).is_ok() {
+                let published = self.segments.published(*layer).expect("brought up to date");
+                let len = published.segment.archived_len();
                 self.publisher
                     .try_publish_layer(layer.0, generation, len, |buf| {
-                        segment.archive_into(buf).map(|_| ())
+                        published.segment.archive_into(buf).map(|_| ())
                     })?;
                 report.layers_sent += 1;
                 report.bytes_sent += len;
+                for (index, (id, chunk_generation)) in published.chunks().enumerate() {
+                    if self.publisher.layer_generation(id) == Some(chunk_generation) {
+                        continue;
+                    }
+                    let chunk = published.chunk(index);
+                    let len = chunk.archived_len();
+                    self.publisher
+                        .try_publish_layer(id, chunk_generation, len, |buf| {
+                            chunk.archive_into(buf).map(|_| ())
+                        })?;
+                    report.chunks_sent += 1;
+                    report.bytes_sent += len;
+                }
             } else {
                 report.layers_unchanged += 1;
             }
@@ -213,11 +254,22 @@ impl SceneWriter {
                 generation,
             });
         }
-        let live: BTreeSet<u32> = layers.iter().map(|l| l.0).collect();
-        for gone in self.published_layers.difference(&live) {
+        // Chunk ids sort after every layer id, each layer's in column order.
+        for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
+            entries.extend(
+                published
+                    .chunks()
+                    .map(|(layer_id, generation)| ManifestEntry {
+                        layer_id,
+                        generation,
+                    }),
+            );
+        }
+        let live: BTreeSet<u32> = entries.iter().map(|e| e.layer_id).collect();
+        for gone in self.published_segments.difference(&live) {
             self.publisher.retire_layer(*gone);
         }
-        self.published_layers = live;
+        self.published_segments = live;
         let generation = self.generation + 1;
         let manifest = self.segments.manifest(&self.graph, generation);
         let len = manifest.archived_len();

@@ -116,8 +116,8 @@ impl Window {
                     continue;
                 };
                 if points.len() > base + keep {
-                    let mut kept = points[..base].to_vec();
-                    kept.extend_from_slice(&points[points.len() - keep..]);
+                    let mut kept: Vec<_> = points.iter().take(base).copied().collect();
+                    kept.extend(points.iter().skip(points.len() - keep).copied());
                     g.set_geometry(id, kept)?;
                 }
             }

@@ -245,7 +245,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     // the box around its mesh nodes' points.
                     let bbox = view.aabb(n).or_else(|| {
                         mesh.iter()
-                            .filter_map(|&m| Aabb::from_points(view.points(m)))
+                            .filter_map(|&m| view.points(m).aabb())
                             .reduce(|a, b| a.union(&b))
                     });
                     claimants.push(Claimant {
@@ -278,7 +278,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                         .filter_map(|n| {
                             self.view
                                 .aabb(n)
-                                .or_else(|| Aabb::from_points(self.view.points(n)))
+                                .or_else(|| self.view.points(n).aabb())
                         })
                         .reduce(|a, b| a.union(&b))
                 })

@@ -42,7 +42,7 @@ impl<V: SceneView> Objects<'_, V> {
                 .map(|c| match (&c.bbox, c.mesh.is_empty()) {
                     (Some(around), false) => {
                         let sets: Vec<&[Point]> =
-                            c.mesh.iter().map(|&m| self.view.points(m)).collect();
+                            c.mesh.iter().flat_map(|&m| self.view.points(m).runs()).collect();
                         octant_boxes(&sets, around)
                     }
                     _ => Vec::new(),

@@ -7,6 +7,7 @@
 //! the patch small (see `SegmentCache`), so the scan costs a bounded number of
 //! [`crate::distance_squared`] per query, computed as brute force computes them.
 
+use crate::points::{PointColumn, Points};
 use crate::{Point, distance_squared};
 
 /// The patch over an archived layer index's base tree, read from a checked segment.
@@ -18,7 +19,7 @@ pub(crate) struct RowPatch<'a> {
     patched: &'a [u32],
     /// The layer's point offsets (rows + 1 entries) and points.
     point_offsets: &'a [u32],
-    points: &'a [Point],
+    points: PointColumn<'a>,
     /// Whether the base tree is the whole index (nothing patched, no row removed).
     clean: bool,
 }
@@ -30,7 +31,7 @@ impl<'a> RowPatch<'a> {
         base_rows: u32,
         patched: &'a [u32],
         point_offsets: &'a [u32],
-        points: &'a [Point],
+        points: PointColumn<'a>,
     ) -> Self {
         let rows = point_offsets.len().saturating_sub(1) as u32;
         RowPatch {
@@ -61,12 +62,12 @@ impl<'a> RowPatch<'a> {
 
     /// Each patched row with its live points (rows the checks let through are in range;
     /// a row out of range yields no points).
-    fn rows(&self) -> impl Iterator<Item = (u32, &'a [Point])> + '_ {
+    fn rows(&self) -> impl Iterator<Item = (u32, Points<'a>)> + '_ {
         self.patched.iter().map(|&row| {
             let r = row as usize;
             let points = match (self.point_offsets.get(r), self.point_offsets.get(r + 1)) {
-                (Some(&a), Some(&b)) => self.points.get(a as usize..b as usize).unwrap_or(&[]),
-                _ => &[],
+                (Some(&a), Some(&b)) => self.points.range(a as usize..b as usize),
+                _ => Points::default(),
             };
             (row, points)
         })

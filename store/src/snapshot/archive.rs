@@ -4,7 +4,7 @@
 
 use super::schema::{
     FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
-    NodeIndexSegment,
+    NodeIndexSegment, PointChunk,
 };
 use crate::bytes::{SegmentBytes, archive};
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
@@ -347,6 +347,7 @@ macro_rules! in_place_archiving {
 
 in_place_archiving!(LayerSegment);
 in_place_archiving!(Manifest);
+in_place_archiving!(PointChunk);
 
 impl SceneGraph {
     /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of

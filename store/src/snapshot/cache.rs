@@ -23,6 +23,7 @@
 //! mutations.
 
 use super::archive::StringTable;
+use super::chunk_state::{ChangedPoints, ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
 use super::schema::{LayerSegment, Manifest};
 use crate::change::LayerChanges;
@@ -76,6 +77,8 @@ struct Cached {
     strings_at_full_build: usize,
     /// Base entries of the layer index that its patch killed (`index_patch`).
     index_killed: usize,
+    /// The point chunks last published, if the layer is chunked (`chunk_state`).
+    chunks: ChunkState,
 }
 
 impl SegmentCache {
@@ -93,12 +96,44 @@ impl SegmentCache {
     /// # Panics
     /// If `layer` does not exist.
     pub fn layer_segment(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &LayerSegment {
+        &self.update(graph, layer).segment
+    }
+
+    /// The layer as a publishing writer sends it: [`SegmentCache::layer_segment`], but a
+    /// layer of more than [`CHUNKED_ABOVE_POINTS`](super::CHUNKED_ABOVE_POINTS) points
+    /// has its point column split into chunks, and each chunk keeps the generation at
+    /// which its points last changed, so that only changed chunks need sending (see
+    /// `chunk`). Consumes the layer's change journal.
+    ///
+    /// # Panics
+    /// If `layer` does not exist.
+    pub fn published_layer(&mut self, graph: &mut SceneGraph, layer: LayerId) -> PublishedLayer<'_> {
+        let cached = self.update(graph, layer);
+        cached.chunks.publish_form(&mut cached.segment);
+        PublishedLayer::new(&cached.segment, &cached.chunks)
+    }
+
+    /// The layer as the last [`SegmentCache::published_layer`] left it (`None` if this
+    /// cache never built it). A later [`SegmentCache::layer_segment`] puts its points
+    /// back inline.
+    pub fn published(&self, layer: LayerId) -> Option<PublishedLayer<'_>> {
+        self.layers
+            .get(&layer)
+            .map(|c| PublishedLayer::new(&c.segment, &c.chunks))
+    }
+
+    /// The cached layer brought up to date with the graph, its points inline.
+    fn update(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &mut Cached {
         let l = &graph.layers[&layer];
         let (generation, incarnation) = (l.generation, l.incarnation);
-        let cached = self
+        let mut cached = self
             .layers
             .remove(&layer)
             .filter(|c| c.incarnation == incarnation);
+        if let Some(c) = cached.as_mut() {
+            let Cached { segment, chunks, .. } = &mut **c;
+            chunks.restore(segment);
+        }
         let cached = match cached {
             Some(c) if c.segment.generation == generation => c,
             Some(c) => {
@@ -110,12 +145,7 @@ impl SegmentCache {
                 full(graph, layer)
             }
         };
-        &self
-            .layers
-            .entry(layer)
-            .insert_entry(cached)
-            .into_mut()
-            .segment
+        self.layers.entry(layer).insert_entry(cached).into_mut()
     }
 
     /// The manifest [`SceneGraph::manifest`] builds, kept for next time: while no layer,
@@ -160,6 +190,10 @@ fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
         segment,
         strings,
         index_killed: 0,
+        chunks: ChunkState {
+            changed: ChangedPoints::All,
+            ..ChunkState::default()
+        },
     })
 }
 
@@ -177,6 +211,7 @@ fn patched(
         strings_at_full_build,
         incarnation,
         mut index_killed,
+        mut chunks,
     } = cache;
     if changes.everything
         || changes.since != old.generation
@@ -224,6 +259,7 @@ fn patched(
     ids.extend_from_slice(&old.ids);
     ids.extend_from_slice(&appended);
     let point_changes = PointChanges::find(graph, &old, &dirty_rows, &ids, cut_points);
+    chunks.changed.note_patch(graph, &old, &dirty_rows, &ids);
 
     let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &ids) {
         Some(terms_changed) => {
@@ -287,6 +323,7 @@ fn patched(
         incarnation,
         strings_at_full_build,
         index_killed,
+        chunks,
     }))
 }
 

@@ -178,7 +178,8 @@ impl SnapshotFile {
                 &format!("{what}: layer segment {i}"),
             )?);
         }
-        ArchivedScene::new(manifest, layers).map_err(|reason| SnapshotError::Inconsistent {
+        // Files keep every layer's points inline: a file holds no chunk segments.
+        ArchivedScene::new(manifest, layers, Vec::new()).map_err(|reason| SnapshotError::Inconsistent {
             what: what.to_owned(),
             reason,
         })?;
@@ -204,7 +205,7 @@ impl SnapshotFile {
             .map(|r| unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(&data[r.clone()]) })
             .collect();
         // `from_backing` ran `ArchivedScene::new` on this cut.
-        ArchivedScene::new_prechecked(manifest, layers)
+        ArchivedScene::new_prechecked(manifest, layers, Vec::new())
     }
 
     /// Size of the file in bytes.

@@ -1,7 +1,8 @@
 //! Archived snapshots: the packed, column-oriented rkyv layout, `.ygg` files, and
 //! [`ArchivedScene`], the [`crate::SceneView`] over validated archived bytes.
 //!
-//! A snapshot is one **manifest** segment plus one **layer** segment per layer. A layer
+//! A snapshot is one **manifest** segment plus one **layer** segment per layer, and
+//! for a layer of many points its point column in **chunk** segments (`chunk`). A layer
 //! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids,
 //! children in CSR form, out- and in-edges in CSR form (rows within the layer), labels,
 //! features, sparse bounding boxes and the inverted label/key indexes, plus the layer's
@@ -30,6 +31,8 @@
 
 mod archive;
 mod cache;
+mod chunk;
+mod chunk_state;
 mod file;
 mod index_patch;
 mod schema;
@@ -38,13 +41,20 @@ mod view;
 
 pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
+pub use chunk_state::PublishedLayer;
 pub use file::{FILE_MAGIC, SnapshotFile};
+pub use chunk::{
+    CHUNKED_ABOVE_POINTS, MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, POINT_CHUNK_LEN,
+    chunk_segment_id, is_chunk_segment_id,
+};
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
-    ArchivedNodeIndexSegment, FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest,
-    ManifestLayer, NodeIndexSegment,
+    ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, FORMAT_VERSION,
+    LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NodeIndexSegment, PointChunk,
+    PointChunkRef,
 };
 pub use validate::{
-    check_layer, layer_unchecked, manifest_unchecked, validate_layer, validate_manifest,
+    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, validate_chunk,
+    validate_layer, validate_manifest,
 };
 pub use view::{ArchivedNodeRef, ArchivedScene};

@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -29,8 +29,13 @@ pub struct LayerSegment {
     pub ids: Vec<u64>,
     /// CSR offsets into `points` (rows + 1 entries).
     pub point_offsets: Vec<u32>,
-    /// Every point of every node of the layer.
+    /// Every point of every node of the layer, unless the layer is chunked: then empty,
+    /// and the points lie in the [`PointChunk`] segments `point_chunks` lists.
     pub points: Vec<[f32; 3]>,
+    /// For a chunked layer, its point column's chunks in order (each but the last holds
+    /// [`POINT_CHUNK_LEN`](super::POINT_CHUNK_LEN) points); empty for a layer kept in one
+    /// piece.
+    pub point_chunks: Vec<PointChunkRef>,
     /// Parent id of each row (`u64::MAX` for none).
     pub parents: Vec<u64>,
     /// CSR offsets into `children`.
@@ -78,6 +83,32 @@ pub struct LayerSegment {
     pub layer_index: Option<LayerIndexSegment>,
     /// The node indexes rooted at nodes of this layer, ascending by root.
     pub node_indexes: Vec<NodeIndexSegment>,
+}
+
+/// A chunk of a chunked layer's point column, as its layer segment names it.
+#[derive(Archive, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PointChunkRef {
+    /// The generation of the chunk segment: the layer generation at which the chunk's
+    /// points last changed.
+    pub generation: u64,
+    /// Points in the chunk.
+    pub len: u32,
+}
+
+/// One chunk of a chunked layer's point column: a segment of its own, republished only
+/// when its points change (appending to a mesh republishes the last chunk).
+#[derive(Archive, Serialize, Debug, Default)]
+pub struct PointChunk {
+    /// [`FORMAT_VERSION`] of the writer.
+    pub version: u32,
+    /// The layer whose column this is part of.
+    pub layer: u32,
+    /// The chunk's place in the column.
+    pub index: u32,
+    /// The chunk's generation (see [`PointChunkRef::generation`]).
+    pub generation: u64,
+    /// The points at column positions `index * POINT_CHUNK_LEN ..`.
+    pub points: Vec<[f32; 3]>,
 }
 
 /// A layer index as archived: a base kd-tree plus the rows patched since it was built,

@@ -7,7 +7,10 @@
     reason = "re-deriving references to bytes validated before"
 )]
 
-use super::schema::{ArchivedLayerSegment, ArchivedManifest, FORMAT_VERSION, u32s, u64s};
+use super::chunk::{POINT_CHUNK_LEN, check_chunk_refs, chunk_error};
+use super::schema::{
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, FORMAT_VERSION, u32s, u64s,
+};
 use crate::SnapshotError;
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::check_tree;
@@ -65,6 +68,38 @@ pub fn validate_layer<'a>(
     Ok(l)
 }
 
+/// Validates point-chunk bytes (bytecheck, version, at most
+/// [`POINT_CHUNK_LEN`] points, not empty). Whether the chunk is the one its layer segment
+/// names is checked when the cut is joined ([`super::ArchivedScene::new`]).
+///
+/// # Errors
+/// Misaligned bytes, bytecheck failure, a foreign version, or a wrong point count.
+pub fn validate_chunk<'a>(
+    bytes: &'a [u8],
+    what: &str,
+) -> Result<&'a ArchivedPointChunk, SnapshotError> {
+    check_alignment(bytes, what)?;
+    let c = rkyv::access::<ArchivedPointChunk, rkyv::rancor::Error>(bytes)
+        .map_err(|e| validation(what, e))?;
+    if c.version.to_native() != FORMAT_VERSION {
+        return Err(SnapshotError::SchemaVersion {
+            what: what.to_owned(),
+            found: c.version.to_native(),
+            expected: FORMAT_VERSION,
+        });
+    }
+    if c.points.is_empty() || c.points.len() > POINT_CHUNK_LEN {
+        return Err(chunk_error(
+            what,
+            format!(
+                "a point chunk holds {} points (1 to {POINT_CHUNK_LEN})",
+                c.points.len()
+            ),
+        ));
+    }
+    Ok(c)
+}
+
 fn check_alignment(bytes: &[u8], what: &str) -> Result<(), SnapshotError> {
     if !(bytes.as_ptr() as usize).is_multiple_of(16) {
         return Err(SnapshotError::Layout {
@@ -116,12 +151,14 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
         return Err("reserved node id u64::MAX".into());
     }
     let nstr = l.strings.len();
-    check_offsets(
-        "point_offsets",
-        u32s(&l.point_offsets),
-        rows,
-        l.points.len(),
-    )?;
+    let points = if l.point_chunks.is_empty() {
+        l.points.len()
+    } else if !l.points.is_empty() {
+        return Err("a chunked layer also holds points inline".into());
+    } else {
+        check_chunk_refs(&l.point_chunks)?
+    };
+    check_offsets("point_offsets", u32s(&l.point_offsets), rows, points)?;
     if l.parents.len() != rows {
         return Err("parents column length differs from ids".into());
     }
@@ -303,6 +340,17 @@ pub unsafe fn layer_unchecked(bytes: &[u8]) -> &ArchivedLayerSegment {
     // SAFETY: the caller guarantees that `validate_layer` (bytecheck + `check_layer`)
     // accepted these very bytes and that they have not changed since.
     unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(bytes) }
+}
+
+/// Re-derives a point chunk from bytes that [`validate_chunk`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_chunk`] accepted.
+pub unsafe fn chunk_unchecked(bytes: &[u8]) -> &ArchivedPointChunk {
+    // SAFETY: the caller guarantees that `validate_chunk` accepted these very bytes and
+    // that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedPointChunk>(bytes) }
 }
 
 /// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.

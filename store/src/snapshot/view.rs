@@ -1,11 +1,15 @@
 //! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
 
-use super::schema::{ArchivedLayerSegment, ArchivedManifest, NO_PARENT, u32s, u64s};
+use super::chunk::{POINT_CHUNK_LEN, check_chunk_matches, chunk_points};
+use super::schema::{
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, NO_PARENT, u32s, u64s,
+};
 use super::validate::{check_dag, layer_position};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
 use crate::view::{EdgeRef, SceneView};
-use crate::{Aabb, FeatureRef, LayerId, NodeId, Point};
+use crate::points::PointColumn;
+use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, Points};
 use rkyv::collections::swiss_table::ArchivedHashMap;
 use rkyv::string::ArchivedString;
 use rkyv::vec::ArchivedVec;
@@ -19,6 +23,11 @@ pub struct ArchivedScene<'a> {
     manifest: &'a ArchivedManifest,
     /// Layer segments in manifest order (ascending layer id).
     layers: Vec<&'a ArchivedLayerSegment>,
+    /// The points of every chunk of every chunked layer, in layer and column order.
+    chunks: Vec<&'a [Point]>,
+    /// Per layer position (and one past the last), where its chunks start in `chunks`;
+    /// empty when no layer is chunked.
+    chunk_start: Vec<u32>,
 }
 
 /// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
@@ -29,14 +38,17 @@ pub struct ArchivedNodeRef {
 }
 
 impl<'a> ArchivedScene<'a> {
-    /// Joins a validated manifest with its validated layer segments, checking that they
-    /// form the cut the manifest names (same layers, same generations, same counts).
+    /// Joins a validated manifest with its validated layer segments and the validated
+    /// point chunks of its chunked layers (in layer order, then column order), checking
+    /// that they form the cut the manifest names (same layers, same generations, same
+    /// counts, each chunk the one its layer names).
     ///
     /// # Errors
     /// A description of the first mismatch.
     pub fn new(
         manifest: &'a ArchivedManifest,
         layers: Vec<&'a ArchivedLayerSegment>,
+        chunks: Vec<&'a ArchivedPointChunk>,
     ) -> Result<Self, String> {
         if manifest.layers.len() != layers.len() {
             return Err(format!(
@@ -80,7 +92,22 @@ impl<'a> ArchivedScene<'a> {
                 return Err("graph index names an unknown layer".into());
             }
         }
-        Ok(ArchivedScene { manifest, layers })
+        let mut next = chunks.iter();
+        for l in &layers {
+            for (index, r) in l.point_chunks.iter().enumerate() {
+                let chunk = next.next().ok_or_else(|| {
+                    format!("layer {} names point chunk {index}, not given", l.layer)
+                })?;
+                check_chunk_matches(chunk, l.layer.to_native(), index, r)?;
+            }
+        }
+        if next.next().is_some() {
+            return Err(format!(
+                "{} point chunks given that no layer names",
+                next.len() + 1
+            ));
+        }
+        Ok(Self::new_prechecked(manifest, layers, chunks))
     }
 
     /// Joins a manifest with its layer segments that [`ArchivedScene::new`] already
@@ -90,8 +117,36 @@ impl<'a> ArchivedScene<'a> {
     pub fn new_prechecked(
         manifest: &'a ArchivedManifest,
         layers: Vec<&'a ArchivedLayerSegment>,
+        chunks: Vec<&'a ArchivedPointChunk>,
     ) -> Self {
-        ArchivedScene { manifest, layers }
+        let mut chunk_start = Vec::new();
+        if !chunks.is_empty() {
+            chunk_start.reserve(layers.len() + 1);
+            let mut at = 0;
+            for l in &layers {
+                chunk_start.push(at);
+                at += l.point_chunks.len() as u32;
+            }
+            chunk_start.push(at);
+        }
+        ArchivedScene {
+            manifest,
+            layers,
+            chunks: chunks.into_iter().map(chunk_points).collect(),
+            chunk_start,
+        }
+    }
+
+    /// The point column of the layer at manifest position `layer`.
+    fn point_column(&self, layer: u32) -> PointColumn<'_> {
+        let l = layer as usize;
+        match self.chunk_start.get(l..=l + 1) {
+            Some(&[a, b]) if a < b => PointColumn::Chunked {
+                chunks: self.chunks.get(a as usize..b as usize).unwrap_or(&[]),
+                chunk_len: POINT_CHUNK_LEN,
+            },
+            _ => PointColumn::Inline(bytemuck::cast_slice(self.layers[l].points.as_slice())),
+        }
     }
 
     /// The manifest's generation.
@@ -242,10 +297,10 @@ impl SceneView for ArchivedScene<'_> {
         LayerId(self.seg(n).layer.to_native())
     }
 
-    fn points(&self, n: ArchivedNodeRef) -> &[Point] {
+    fn points(&self, n: ArchivedNodeRef) -> Points<'_> {
         let seg = self.seg(n);
-        let points: &[Point] = bytemuck::cast_slice(seg.points.as_slice());
-        &points[Self::range(&seg.point_offsets, n.row)]
+        self.point_column(n.layer)
+            .range(Self::range(&seg.point_offsets, n.row))
     }
 
     fn parent(&self, n: ArchivedNodeRef) -> Option<NodeId> {
@@ -349,13 +404,13 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
-        let (_, seg) = self.segment(layer)?;
+        let (position, seg) = self.segment(layer)?;
         let index = seg.layer_index.as_ref()?;
         let patch = RowPatch::new(
             index.base_rows.to_native(),
             u32s(&index.patched),
             u32s(&seg.point_offsets),
-            bytemuck::cast_slice(seg.points.as_slice()),
+            self.point_column(position),
         );
         // `check_layer` bounded the tree's items by its base rows, and the patched rows
         // by the layer's rows.

@@ -64,6 +64,14 @@ pub enum PublishError {
         /// The limit.
         max: usize,
     },
+    /// A layer id in the range that names other segments (the store's point chunks).
+    #[error("layer id {layer_id} is above the largest publishable id {max}")]
+    LayerIdTooLarge {
+        /// The layer id.
+        layer_id: u32,
+        /// The largest id a layer may have.
+        max: u32,
+    },
     /// The manifest's layer ids are not strictly increasing.
     #[error("manifest entries must be sorted by layer id without duplicates (at layer {layer_id})")]
     UnsortedManifest {

@@ -1,0 +1,154 @@
+//! Chunked layers: the point column of a large layer is published as fixed-size
+//! [`PointChunk`] segments beside its layer segment, so that a change republishes the
+//! chunks it touches (appending to a mesh node sends the last chunk and the small layer
+//! segment, not the whole column) and a reader keeps, and validated once, the rest.
+//!
+//! A chunk travels as a segment of its own, under a segment id derived from its layer
+//! and place ([`chunk_segment_id`]): ids with the top bit set, so that a cut's segments
+//! sorted by id list its layers first and then each layer's chunks in column order.
+
+use super::schema::{ArchivedPointChunk, FORMAT_VERSION, PointChunk};
+use crate::{LayerId, Point, SnapshotError};
+
+/// Points per chunk of a chunked layer (96 KiB of coordinates).
+pub const POINT_CHUNK_LEN: usize = 8192;
+
+/// Layers with more points than this are published chunked (two chunks or more).
+pub const CHUNKED_ABOVE_POINTS: usize = POINT_CHUNK_LEN;
+
+/// Top bit of a segment id: set for chunks, clear for layers.
+const CHUNK_ID_BIT: u32 = 1 << 31;
+
+/// Bits of a chunk's segment id that hold its place in the column.
+const CHUNK_INDEX_BITS: u32 = 11;
+
+/// Most chunks one layer may be split into; a larger column is kept in one piece.
+pub const MAX_CHUNKS_PER_LAYER: usize = 1 << CHUNK_INDEX_BITS;
+
+/// Layer ids below this may be chunked (the layer id must fit the segment id's bits,
+/// and no chunk may take the manifest's id `u32::MAX`).
+const CHUNKABLE_LAYERS: u32 = (1 << (31 - CHUNK_INDEX_BITS)) - 1;
+
+/// Largest layer id a snapshot may hold: segment ids at or above it name chunks.
+pub const MAX_LAYER_ID: u32 = CHUNK_ID_BIT - 1;
+
+/// The segment id of chunk `index` of `layer`'s point column, if that layer can be
+/// chunked that far.
+pub fn chunk_segment_id(layer: LayerId, index: usize) -> Option<u32> {
+    (layer.0 < CHUNKABLE_LAYERS && index < MAX_CHUNKS_PER_LAYER)
+        .then(|| CHUNK_ID_BIT | layer.0 << CHUNK_INDEX_BITS | index as u32)
+}
+
+/// Whether a segment id names a chunk (not a layer, not the manifest).
+pub fn is_chunk_segment_id(id: u32) -> bool {
+    id & CHUNK_ID_BIT != 0 && id != u32::MAX
+}
+
+/// Whether a layer with `points` points is published in chunks.
+pub(crate) fn is_chunked(layer: LayerId, points: usize) -> bool {
+    points > CHUNKED_ABOVE_POINTS && chunk_segment_id(layer, chunk_count(points) - 1).is_some()
+}
+
+/// Chunks a column of `points` points takes.
+pub(crate) fn chunk_count(points: usize) -> usize {
+    points.div_ceil(POINT_CHUNK_LEN)
+}
+
+/// The column positions chunk `index` holds, in a column of `points` points.
+pub(crate) fn chunk_range(index: usize, points: usize) -> std::ops::Range<usize> {
+    let start = index * POINT_CHUNK_LEN;
+    start..points.min(start + POINT_CHUNK_LEN)
+}
+
+impl PointChunk {
+    /// Chunk `index` of `layer`'s column `points`, at `generation`.
+    pub fn new(layer: LayerId, index: usize, generation: u64, points: &[Point]) -> Self {
+        PointChunk {
+            version: FORMAT_VERSION,
+            layer: layer.0,
+            index: index as u32,
+            generation,
+            points: points.to_vec(),
+        }
+    }
+}
+
+/// Checks the chunk list of a layer segment: every chunk but the last full, the last
+/// not empty, no more than [`MAX_CHUNKS_PER_LAYER`]. Returns the points they hold.
+pub(crate) fn check_chunk_refs(refs: &[super::schema::ArchivedPointChunkRef]) -> Result<usize, String> {
+    if refs.len() > MAX_CHUNKS_PER_LAYER {
+        return Err(format!(
+            "{} point chunks, at most {MAX_CHUNKS_PER_LAYER}",
+            refs.len()
+        ));
+    }
+    let mut total = 0;
+    for (i, r) in refs.iter().enumerate() {
+        let len = r.len.to_native() as usize;
+        let last = i + 1 == refs.len();
+        if len > POINT_CHUNK_LEN || len == 0 || (!last && len != POINT_CHUNK_LEN) {
+            return Err(format!(
+                "point chunk {i} of {} holds {len} points (every chunk but the last holds {POINT_CHUNK_LEN}, the last 1 to {POINT_CHUNK_LEN})",
+                refs.len()
+            ));
+        }
+        total += len;
+    }
+    Ok(total)
+}
+
+/// Checks a chunk segment against the entry of its layer segment that names it.
+pub(crate) fn check_chunk_matches(
+    chunk: &ArchivedPointChunk,
+    layer: u32,
+    index: usize,
+    r: &super::schema::ArchivedPointChunkRef,
+) -> Result<(), String> {
+    if chunk.layer != layer
+        || chunk.index != index as u32
+        || chunk.generation != r.generation
+        || chunk.points.len() != r.len.to_native() as usize
+    {
+        return Err(format!(
+            "point chunk segment (layer {}, chunk {}, generation {}, {} points) where layer {layer} names chunk {index} at generation {} with {} points",
+            chunk.layer,
+            chunk.index,
+            chunk.generation,
+            chunk.points.len(),
+            r.generation,
+            r.len
+        ));
+    }
+    Ok(())
+}
+
+impl crate::SceneGraph {
+    /// Segments a snapshot of this graph takes: one per layer, plus the point chunks of
+    /// each chunked layer (for sizing a publisher's bound on segments per cut).
+    pub fn snapshot_segments(&self) -> usize {
+        self.layers
+            .iter()
+            .map(|(&id, l)| {
+                let points = l.nodes.iter().map(|n| self.nodes[n].points.len()).sum();
+                1 + if is_chunked(id, points) {
+                    chunk_count(points)
+                } else {
+                    0
+                }
+            })
+            .sum()
+    }
+}
+
+/// A validated chunk's points.
+pub(crate) fn chunk_points(chunk: &ArchivedPointChunk) -> &[Point] {
+    bytemuck::cast_slice(chunk.points.as_slice())
+}
+
+/// Validation error for a chunk that is not one.
+pub(crate) fn chunk_error(what: &str, reason: impl Into<String>) -> SnapshotError {
+    SnapshotError::Validation {
+        what: what.to_owned(),
+        reason: reason.into(),
+    }
+}

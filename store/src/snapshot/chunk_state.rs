@@ -1,0 +1,182 @@
+//! What a publishing writer's [`super::SegmentCache`] keeps per chunked layer: which
+//! column positions changed since the last publish ([`ChangedPoints`]) and each chunk's
+//! generation ([`ChunkState`]), so that a publish resends only the chunks whose points
+//! changed; and [`PublishedLayer`], a layer as it is published.
+
+use super::chunk::{chunk_count, chunk_range, chunk_segment_id, is_chunked};
+use super::schema::{LayerSegment, PointChunk, PointChunkRef};
+use crate::{LayerId, NodeId, Point, SceneGraph};
+use std::ops::Range;
+
+/// Column positions whose points may differ from the last publish's.
+#[derive(Debug, Clone)]
+pub(super) enum ChangedPoints {
+    /// Any position (a fresh build).
+    All,
+    /// These ranges (an open end is `usize::MAX`), unordered, possibly overlapping.
+    Ranges(Vec<Range<usize>>),
+}
+
+impl Default for ChangedPoints {
+    fn default() -> Self {
+        ChangedPoints::Ranges(Vec::new())
+    }
+}
+
+impl ChangedPoints {
+    /// Records that positions `range` may have changed.
+    pub(super) fn add(&mut self, range: Range<usize>) {
+        if let ChangedPoints::Ranges(ranges) = self
+            && range.start < range.end
+        {
+            ranges.push(range);
+        }
+    }
+
+    /// Records the changes a row-by-row patch of `old` makes: rows `dirty_rows` take the
+    /// points of the graph's node with the id at that row in `ids`, rows past `old`'s are
+    /// appended. `old` still holds its previous rows (after any cut from its end).
+    pub(super) fn note_patch(
+        &mut self,
+        graph: &SceneGraph,
+        old: &LayerSegment,
+        dirty_rows: &[usize],
+        ids: &[u64],
+    ) {
+        if matches!(self, ChangedPoints::All) {
+            return;
+        }
+        for &row in dirty_rows {
+            let (a, b) = (
+                old.point_offsets[row] as usize,
+                old.point_offsets[row + 1] as usize,
+            );
+            let new = &graph.nodes[&NodeId(ids[row])].points;
+            let same = old.points[a..b]
+                .iter()
+                .zip(new)
+                .take_while(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits))
+                .count();
+            if new.len() == b - a {
+                self.add(a + same..b);
+            } else {
+                // The row changes length: every later position shifts.
+                self.add(a + same..usize::MAX);
+            }
+        }
+        if ids.len() > old.ids.len() {
+            self.add(old.points.len()..usize::MAX);
+        }
+    }
+
+    fn touches(&self, range: &Range<usize>) -> bool {
+        match self {
+            ChangedPoints::All => true,
+            ChangedPoints::Ranges(ranges) => ranges
+                .iter()
+                .any(|r| r.start < range.end && range.start < r.end),
+        }
+    }
+}
+
+/// A chunked layer's chunks as last published.
+#[derive(Debug, Default)]
+pub(super) struct ChunkState {
+    /// Each chunk's reference (generation, length) in the last published layer segment;
+    /// empty when the layer was published in one piece (or not yet).
+    pub(super) refs: Vec<PointChunkRef>,
+    /// The column, moved out of the segment while it is in published form.
+    pub(super) aside: Vec<Point>,
+    /// Positions changed since the last publish.
+    pub(super) changed: ChangedPoints,
+}
+
+impl ChunkState {
+    /// Puts the column back into `segment` (the form the cache patches).
+    pub(super) fn restore(&mut self, segment: &mut LayerSegment) {
+        if !segment.point_chunks.is_empty() {
+            segment.points = std::mem::take(&mut self.aside);
+            segment.point_chunks.clear();
+        }
+    }
+
+    /// Brings the chunks up to date with `segment` and puts it in published form: for a
+    /// chunked layer its points move aside and `point_chunks` lists the chunks, each at
+    /// the generation it last changed (the segment's generation if it changed since the
+    /// last publish).
+    pub(super) fn publish_form(&mut self, segment: &mut LayerSegment) {
+        let layer = LayerId(segment.layer);
+        let total = segment.points.len();
+        let changed = std::mem::take(&mut self.changed);
+        if !is_chunked(layer, total) {
+            self.refs.clear();
+            return;
+        }
+        let refs = (0..chunk_count(total))
+            .map(|i| {
+                let range = chunk_range(i, total);
+                let len = range.len() as u32;
+                match self.refs.get(i) {
+                    Some(old) if old.len == len && !changed.touches(&range) => *old,
+                    _ => PointChunkRef {
+                        generation: segment.generation,
+                        len,
+                    },
+                }
+            })
+            .collect();
+        self.refs = refs;
+        segment.point_chunks.clone_from(&self.refs);
+        self.aside = std::mem::take(&mut segment.points);
+    }
+}
+
+/// A layer as a publishing writer sends it: the layer segment (points moved to chunks
+/// when the layer is chunked) and its point chunks, each with its segment id and
+/// generation ([`super::SegmentCache::published_layer`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PublishedLayer<'c> {
+    /// The layer segment.
+    pub segment: &'c LayerSegment,
+    points: &'c [Point],
+}
+
+impl<'c> PublishedLayer<'c> {
+    pub(super) fn new(segment: &'c LayerSegment, state: &'c ChunkState) -> Self {
+        let points = if segment.point_chunks.is_empty() {
+            &[][..]
+        } else {
+            &state.aside[..]
+        };
+        PublishedLayer { segment, points }
+    }
+
+    /// The layer's point chunks: `(segment id, generation)` each, in column order (none
+    /// for a layer published in one piece).
+    pub fn chunks(&self) -> impl Iterator<Item = (u32, u64)> + 'c {
+        let layer = LayerId(self.segment.layer);
+        self.segment
+            .point_chunks
+            .iter()
+            .enumerate()
+            .map(move |(i, r)| {
+                let id = chunk_segment_id(layer, i).expect("a chunked layer's ids fit");
+                (id, r.generation)
+            })
+    }
+
+    /// Chunk `index` of the column, ready to archive.
+    ///
+    /// # Panics
+    /// If the layer has no chunk `index`.
+    pub fn chunk(&self, index: usize) -> PointChunk {
+        let r = self.segment.point_chunks[index];
+        let range = chunk_range(index, self.points.len());
+        PointChunk::new(
+            LayerId(self.segment.layer),
+            index,
+            r.generation,
+            &self.points[range],
+        )
+    }
+}
