@@ -167,7 +167,9 @@ pub unsafe extern "C" fn ygg_snapshot_open_file(
         // SAFETY: the caller's contract for `path` and `out`.
         let (path, out) = unsafe { (str_arg(path, "path")?, Out::new(out, "out")?) };
         let file = SnapshotFile::open(path).map_err(FfiError::wrap(YggStatus::Io, "open"))?;
-        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(file))));
+        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(
+            file,
+        ))));
         Ok(())
     })
 }
@@ -188,7 +190,9 @@ pub unsafe extern "C" fn ygg_graph_snapshot(
         // SAFETY: the caller's contract for `out`.
         let out = unsafe { Out::new(out, "out") }?;
         let file = graph_arg(graph)?.to_snapshot();
-        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(file))));
+        out.write(handle::register(YggSnapshot::new(SnapshotSource::File(
+            file,
+        ))));
         Ok(())
     })
 }

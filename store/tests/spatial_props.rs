@@ -6,13 +6,15 @@
 //! input is an error.
 
 use proptest::prelude::*;
+use std::collections::BTreeMap;
 use ygg_store::index::{IndexCache, SpatialIndex, build_layer_index, build_subtree_index};
 use ygg_store::query::{
     self, ConeView, SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes,
     nodes_within_radius, visible, within_index,
 };
 use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, SegmentCache, archive, validate_layer, validate_manifest,
+    ArchivedScene, SegmentBytes, SegmentCache, archive, validate_chunk, validate_layer,
+    validate_manifest,
 };
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView, Scope, distance_squared};
 
@@ -368,32 +370,74 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
     }
 }
 
-/// The segments a publishing writer sends for `g` now (through `segments`, which
-/// patches the layer indexes it built before), archived: the manifest, then each layer.
-fn published(g: &mut SceneGraph, segments: &mut SegmentCache) -> (SegmentBytes, Vec<SegmentBytes>) {
-    let layers: Vec<LayerId> = g.layers().collect();
-    let layers = layers
-        .into_iter()
-        .map(|l| archive(segments.layer_segment(g, l)))
-        .collect();
-    (archive(segments.manifest(g, 1)), layers)
+/// A publishing writer and a reader in one: the writer's cache patches the layer indexes
+/// it built before and chunks every layer of more than [`CHUNK`] points (small, so that
+/// chunk boundaries fall everywhere); like the transport, only chunks whose generation
+/// changed are sent, and the reader keeps the others as it got them. A chunk the cache
+/// failed to resend after its points changed would answer queries wrongly.
+struct Publisher {
+    segments: SegmentCache,
+    /// Chunks the reader holds: segment id -> (generation, bytes).
+    held: BTreeMap<u32, (u64, SegmentBytes)>,
 }
 
-/// Checks every query on the segments a publishing writer sends for `g` now.
-fn check_published(g: &mut SceneGraph, segments: &mut SegmentCache, probes: &[Probe]) {
-    let (manifest, layers) = published(g, segments);
+/// Points per chunk in [`Publisher`].
+const CHUNK: usize = 4;
+
+impl Publisher {
+    fn new() -> Self {
+        Publisher {
+            segments: SegmentCache::with_point_chunk_len(CHUNK),
+            held: BTreeMap::new(),
+        }
+    }
+
+    /// Publishes `g` now: the archived manifest, each layer, and the ids of the chunks
+    /// of the cut (their bytes in `held`).
+    fn publish(&mut self, g: &mut SceneGraph) -> (SegmentBytes, Vec<SegmentBytes>, Vec<u32>) {
+        let layers: Vec<LayerId> = g.layers().collect();
+        let mut archived = Vec::new();
+        let mut ids = Vec::new();
+        for l in layers {
+            let p = self.segments.published_layer(g, l);
+            archived.push(archive(p.segment));
+            for (i, (id, generation)) in p.chunks().enumerate() {
+                if self.held.get(&id).map(|h| h.0) != Some(generation) {
+                    self.held.insert(id, (generation, archive(&p.chunk(i))));
+                }
+                ids.push(id);
+            }
+        }
+        self.held.retain(|id, _| ids.contains(id));
+        (archive(self.segments.manifest(g, 1)), archived, ids)
+    }
+}
+
+/// Checks every query on the segments a publishing writer sends for `g` now, as a
+/// reader that kept the unchanged chunks sees them.
+fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Probe]) {
+    let (manifest, layers, chunk_ids) = publisher.publish(g);
     let manifest = validate_manifest(&manifest, "manifest").unwrap();
     let layers = layers
         .iter()
         .map(|l| validate_layer(l, "layer").unwrap())
         .collect();
-    let view = ArchivedScene::new(manifest, layers, Vec::new()).unwrap();
+    let chunks = chunk_ids
+        .iter()
+        .map(|id| validate_chunk(&publisher.held[id].1, "chunk").unwrap())
+        .collect();
+    let view = ArchivedScene::new(manifest, layers, chunks).unwrap();
     check_view(&view, probes);
     for l in g.layers() {
         assert_eq!(
             g.layer_index(l).map(|i| i.len()),
             view.layer_index(l).map(|i| i.len())
         );
+        assert_eq!(g.layer_len(l), view.layer_len(l));
+        for n in view.layer_nodes(l) {
+            let live = g.node(view.node_id(n)).unwrap();
+            assert_eq!(g.points(live), view.points(n));
+        }
     }
 }
 
@@ -401,7 +445,7 @@ fn check_all(
     g: &mut SceneGraph,
     probes: &[Probe],
     cache: &mut IndexCache,
-    segments: &mut SegmentCache,
+    segments: &mut Publisher,
 ) {
     g.check_invariants().unwrap();
     check_view(&*g, probes);
@@ -437,7 +481,7 @@ proptest! {
     ) {
         let mut g = build(&start);
         let mut cache = IndexCache::new();
-        let mut segments = SegmentCache::new();
+        let mut segments = Publisher::new();
         check_all(&mut g, &probes, &mut cache, &mut segments);
         for (i, op) in ops.iter().enumerate() {
             apply(&mut g, op);
@@ -670,7 +714,7 @@ fn large_scene_under_many_mutations_matches_brute_force() {
             range: rng.gen_range(0..16),
         })
         .collect();
-    let mut segments = SegmentCache::new();
+    let mut segments = Publisher::new();
     for step in 0..4000 {
         let mesh_nodes: Vec<NodeId> = g.layer_nodes(mesh).map(|n| g.node_id(n)).collect();
         let pick = mesh_nodes[rng.gen_range(0..mesh_nodes.len())];
@@ -705,7 +749,7 @@ fn large_scene_under_many_mutations_matches_brute_force() {
         // A writer publishes every few steps: its layer indexes are patched, and folded
         // past their budget.
         if step % 4 == 3 {
-            published(&mut g, &mut segments);
+            segments.publish(&mut g);
         }
         if step % 250 == 249 {
             check_published(&mut g, &mut segments, &probes);

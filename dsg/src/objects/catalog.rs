@@ -275,11 +275,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                 .map(|&l| {
                     self.view
                         .layer_nodes(l)
-                        .filter_map(|n| {
-                            self.view
-                                .aabb(n)
-                                .or_else(|| self.view.points(n).aabb())
-                        })
+                        .filter_map(|n| self.view.aabb(n).or_else(|| self.view.points(n).aabb()))
                         .reduce(|a, b| a.union(&b))
                 })
                 .collect()

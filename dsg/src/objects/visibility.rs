@@ -41,8 +41,11 @@ impl<V: SceneView> Objects<'_, V> {
                 .iter()
                 .map(|c| match (&c.bbox, c.mesh.is_empty()) {
                     (Some(around), false) => {
-                        let sets: Vec<&[Point]> =
-                            c.mesh.iter().flat_map(|&m| self.view.points(m).runs()).collect();
+                        let sets: Vec<&[Point]> = c
+                            .mesh
+                            .iter()
+                            .flat_map(|&m| self.view.points(m).runs())
+                            .collect();
                         octant_boxes(&sets, around)
                     }
                     _ => Vec::new(),

@@ -23,7 +23,8 @@
 //! mutations.
 
 use super::archive::StringTable;
-use super::chunk_state::{ChangedPoints, ChunkState, PublishedLayer};
+use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN};
+use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
 use super::schema::{LayerSegment, Manifest};
 use crate::change::LayerChanges;
@@ -51,9 +52,10 @@ use std::ops::Range;
 /// assert_eq!(cache.manifest(&g, 2).layers[0].node_count, 2);
 /// # Ok(()) }
 /// ```
-#[derive(Default)]
 pub struct SegmentCache {
     layers: FxHashMap<LayerId, Box<Cached>>,
+    /// Points per chunk of a chunked layer ([`SegmentCache::published_layer`]).
+    point_chunk_len: usize,
     /// The last manifest and the graph's structure and terms generations it was built at.
     manifest: Option<(u64, u64, Manifest)>,
 }
@@ -81,10 +83,30 @@ struct Cached {
     chunks: ChunkState,
 }
 
+impl Default for SegmentCache {
+    fn default() -> Self {
+        SegmentCache {
+            layers: FxHashMap::default(),
+            point_chunk_len: POINT_CHUNK_LEN,
+            manifest: None,
+        }
+    }
+}
+
 impl SegmentCache {
-    /// An empty cache.
+    /// An empty cache that chunks layers of more than [`POINT_CHUNK_LEN`] points.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// An empty cache that chunks layers of more than `len` points into chunks of `len`
+    /// (rounded up to a power of two, at most [`MAX_POINT_CHUNK_LEN`]): small chunks
+    /// exercise chunk boundaries in tests.
+    pub fn with_point_chunk_len(len: usize) -> Self {
+        SegmentCache {
+            point_chunk_len: len.next_power_of_two().min(MAX_POINT_CHUNK_LEN),
+            ..Self::default()
+        }
     }
 
     /// The segment of `layer`, equal in content to [`SceneGraph::layer_segment`], built
@@ -100,16 +122,21 @@ impl SegmentCache {
     }
 
     /// The layer as a publishing writer sends it: [`SegmentCache::layer_segment`], but a
-    /// layer of more than [`CHUNKED_ABOVE_POINTS`](super::CHUNKED_ABOVE_POINTS) points
-    /// has its point column split into chunks, and each chunk keeps the generation at
+    /// layer of more points than a chunk holds ([`POINT_CHUNK_LEN`] by default) has its
+    /// point column split into chunks, and each chunk keeps the generation at
     /// which its points last changed, so that only changed chunks need sending (see
     /// `chunk`). Consumes the layer's change journal.
     ///
     /// # Panics
     /// If `layer` does not exist.
-    pub fn published_layer(&mut self, graph: &mut SceneGraph, layer: LayerId) -> PublishedLayer<'_> {
+    pub fn published_layer(
+        &mut self,
+        graph: &mut SceneGraph,
+        layer: LayerId,
+    ) -> PublishedLayer<'_> {
+        let chunk_len = self.point_chunk_len;
         let cached = self.update(graph, layer);
-        cached.chunks.publish_form(&mut cached.segment);
+        cached.chunks.publish_form(&mut cached.segment, chunk_len);
         PublishedLayer::new(&cached.segment, &cached.chunks)
     }
 
@@ -131,7 +158,9 @@ impl SegmentCache {
             .remove(&layer)
             .filter(|c| c.incarnation == incarnation);
         if let Some(c) = cached.as_mut() {
-            let Cached { segment, chunks, .. } = &mut **c;
+            let Cached {
+                segment, chunks, ..
+            } = &mut **c;
             chunks.restore(segment);
         }
         let cached = match cached {
@@ -190,10 +219,7 @@ fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
         segment,
         strings,
         index_killed: 0,
-        chunks: ChunkState {
-            changed: ChangedPoints::All,
-            ..ChunkState::default()
-        },
+        chunks: ChunkState::fresh(),
     })
 }
 

@@ -10,11 +10,12 @@
 use super::schema::{ArchivedPointChunk, FORMAT_VERSION, PointChunk};
 use crate::{LayerId, Point, SnapshotError};
 
-/// Points per chunk of a chunked layer (96 KiB of coordinates).
+/// Points per chunk a publishing writer uses by default (96 KiB of coordinates); layers
+/// of more points are published chunked.
 pub const POINT_CHUNK_LEN: usize = 8192;
 
-/// Layers with more points than this are published chunked (two chunks or more).
-pub const CHUNKED_ABOVE_POINTS: usize = POINT_CHUNK_LEN;
+/// Most points per chunk a layer segment may declare.
+pub const MAX_POINT_CHUNK_LEN: usize = 1 << 16;
 
 /// Top bit of a segment id: set for chunks, clear for layers.
 const CHUNK_ID_BIT: u32 = 1 << 31;
@@ -44,20 +45,21 @@ pub fn is_chunk_segment_id(id: u32) -> bool {
     id & CHUNK_ID_BIT != 0 && id != u32::MAX
 }
 
-/// Whether a layer with `points` points is published in chunks.
-pub(crate) fn is_chunked(layer: LayerId, points: usize) -> bool {
-    points > CHUNKED_ABOVE_POINTS && chunk_segment_id(layer, chunk_count(points) - 1).is_some()
+/// Whether a layer with `points` points is published in chunks of `chunk_len`: when it
+/// has more than one chunk's worth and its chunks fit the segment ids.
+pub(crate) fn is_chunked(layer: LayerId, points: usize, chunk_len: usize) -> bool {
+    points > chunk_len && chunk_segment_id(layer, chunk_count(points, chunk_len) - 1).is_some()
 }
 
-/// Chunks a column of `points` points takes.
-pub(crate) fn chunk_count(points: usize) -> usize {
-    points.div_ceil(POINT_CHUNK_LEN)
+/// Chunks of `chunk_len` a column of `points` points takes.
+pub(crate) fn chunk_count(points: usize, chunk_len: usize) -> usize {
+    points.div_ceil(chunk_len)
 }
 
 /// The column positions chunk `index` holds, in a column of `points` points.
-pub(crate) fn chunk_range(index: usize, points: usize) -> std::ops::Range<usize> {
-    let start = index * POINT_CHUNK_LEN;
-    start..points.min(start + POINT_CHUNK_LEN)
+pub(crate) fn chunk_range(index: usize, points: usize, chunk_len: usize) -> std::ops::Range<usize> {
+    let start = index * chunk_len;
+    start..points.min(start + chunk_len)
 }
 
 impl PointChunk {
@@ -73,9 +75,19 @@ impl PointChunk {
     }
 }
 
-/// Checks the chunk list of a layer segment: every chunk but the last full, the last
-/// not empty, no more than [`MAX_CHUNKS_PER_LAYER`]. Returns the points they hold.
-pub(crate) fn check_chunk_refs(refs: &[super::schema::ArchivedPointChunkRef]) -> Result<usize, String> {
+/// Checks the chunk list of a layer segment: a chunk length that is a power of two up
+/// to [`MAX_POINT_CHUNK_LEN`], every chunk but the last full, the last not empty, no more
+/// than [`MAX_CHUNKS_PER_LAYER`]. Returns the points they hold.
+pub(crate) fn check_chunk_refs(
+    refs: &[super::schema::ArchivedPointChunkRef],
+    chunk_len: u32,
+) -> Result<usize, String> {
+    let chunk_len = chunk_len as usize;
+    if !chunk_len.is_power_of_two() || chunk_len > MAX_POINT_CHUNK_LEN {
+        return Err(format!(
+            "point chunks of {chunk_len} points (a power of two up to {MAX_POINT_CHUNK_LEN})"
+        ));
+    }
     if refs.len() > MAX_CHUNKS_PER_LAYER {
         return Err(format!(
             "{} point chunks, at most {MAX_CHUNKS_PER_LAYER}",
@@ -86,9 +98,9 @@ pub(crate) fn check_chunk_refs(refs: &[super::schema::ArchivedPointChunkRef]) ->
     for (i, r) in refs.iter().enumerate() {
         let len = r.len.to_native() as usize;
         let last = i + 1 == refs.len();
-        if len > POINT_CHUNK_LEN || len == 0 || (!last && len != POINT_CHUNK_LEN) {
+        if len > chunk_len || len == 0 || (!last && len != chunk_len) {
             return Err(format!(
-                "point chunk {i} of {} holds {len} points (every chunk but the last holds {POINT_CHUNK_LEN}, the last 1 to {POINT_CHUNK_LEN})",
+                "point chunk {i} of {} holds {len} points (every chunk but the last holds {chunk_len}, the last 1 to {chunk_len})",
                 refs.len()
             ));
         }
@@ -123,15 +135,16 @@ pub(crate) fn check_chunk_matches(
 }
 
 impl crate::SceneGraph {
-    /// Segments a snapshot of this graph takes: one per layer, plus the point chunks of
-    /// each chunked layer (for sizing a publisher's bound on segments per cut).
+    /// Segments a snapshot of this graph takes when published with the default chunk
+    /// length: one per layer, plus the point chunks of each chunked layer (for sizing a
+    /// publisher's bound on segments per cut).
     pub fn snapshot_segments(&self) -> usize {
         self.layers
             .iter()
             .map(|(&id, l)| {
                 let points = l.nodes.iter().map(|n| self.nodes[n].points.len()).sum();
-                1 + if is_chunked(id, points) {
-                    chunk_count(points)
+                1 + if is_chunked(id, points, POINT_CHUNK_LEN) {
+                    chunk_count(points, POINT_CHUNK_LEN)
                 } else {
                     0
                 }

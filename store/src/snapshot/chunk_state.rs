@@ -84,37 +84,52 @@ impl ChangedPoints {
 pub(super) struct ChunkState {
     /// Each chunk's reference (generation, length) in the last published layer segment;
     /// empty when the layer was published in one piece (or not yet).
-    pub(super) refs: Vec<PointChunkRef>,
+    refs: Vec<PointChunkRef>,
     /// The column, moved out of the segment while it is in published form.
-    pub(super) aside: Vec<Point>,
+    aside: Vec<Point>,
     /// Positions changed since the last publish.
     pub(super) changed: ChangedPoints,
+    /// Points per chunk of `refs`.
+    chunk_len: usize,
 }
 
 impl ChunkState {
+    /// The state of a layer built afresh: every chunk changed.
+    pub(super) fn fresh() -> Self {
+        ChunkState {
+            changed: ChangedPoints::All,
+            ..ChunkState::default()
+        }
+    }
+
     /// Puts the column back into `segment` (the form the cache patches).
     pub(super) fn restore(&mut self, segment: &mut LayerSegment) {
         if !segment.point_chunks.is_empty() {
             segment.points = std::mem::take(&mut self.aside);
             segment.point_chunks.clear();
         }
+        segment.point_chunk_len = 0;
     }
 
     /// Brings the chunks up to date with `segment` and puts it in published form: for a
-    /// chunked layer its points move aside and `point_chunks` lists the chunks, each at
-    /// the generation it last changed (the segment's generation if it changed since the
-    /// last publish).
-    pub(super) fn publish_form(&mut self, segment: &mut LayerSegment) {
+    /// layer of more than `chunk_len` points its points move aside and `point_chunks`
+    /// lists the chunks, each at the generation it last changed (the segment's
+    /// generation if it changed since the last publish).
+    pub(super) fn publish_form(&mut self, segment: &mut LayerSegment, chunk_len: usize) {
         let layer = LayerId(segment.layer);
         let total = segment.points.len();
         let changed = std::mem::take(&mut self.changed);
-        if !is_chunked(layer, total) {
+        if !is_chunked(layer, total, chunk_len) {
             self.refs.clear();
             return;
         }
-        let refs = (0..chunk_count(total))
+        if self.chunk_len != chunk_len {
+            self.refs.clear();
+            self.chunk_len = chunk_len;
+        }
+        let refs = (0..chunk_count(total, chunk_len))
             .map(|i| {
-                let range = chunk_range(i, total);
+                let range = chunk_range(i, total, chunk_len);
                 let len = range.len() as u32;
                 match self.refs.get(i) {
                     Some(old) if old.len == len && !changed.touches(&range) => *old,
@@ -127,6 +142,7 @@ impl ChunkState {
             .collect();
         self.refs = refs;
         segment.point_chunks.clone_from(&self.refs);
+        segment.point_chunk_len = chunk_len as u32;
         self.aside = std::mem::take(&mut segment.points);
     }
 }
@@ -171,7 +187,8 @@ impl<'c> PublishedLayer<'c> {
     /// If the layer has no chunk `index`.
     pub fn chunk(&self, index: usize) -> PointChunk {
         let r = self.segment.point_chunks[index];
-        let range = chunk_range(index, self.points.len());
+        let chunk_len = self.segment.point_chunk_len as usize;
+        let range = chunk_range(index, self.points.len(), chunk_len);
         PointChunk::new(
             LayerId(self.segment.layer),
             index,

@@ -179,9 +179,11 @@ impl SnapshotFile {
             )?);
         }
         // Files keep every layer's points inline: a file holds no chunk segments.
-        ArchivedScene::new(manifest, layers, Vec::new()).map_err(|reason| SnapshotError::Inconsistent {
-            what: what.to_owned(),
-            reason,
+        ArchivedScene::new(manifest, layers, Vec::new()).map_err(|reason| {
+            SnapshotError::Inconsistent {
+                what: what.to_owned(),
+                reason,
+            }
         })?;
         Ok(SnapshotFile {
             bytes,

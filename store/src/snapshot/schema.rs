@@ -33,9 +33,11 @@ pub struct LayerSegment {
     /// and the points lie in the [`PointChunk`] segments `point_chunks` lists.
     pub points: Vec<[f32; 3]>,
     /// For a chunked layer, its point column's chunks in order (each but the last holds
-    /// [`POINT_CHUNK_LEN`](super::POINT_CHUNK_LEN) points); empty for a layer kept in one
-    /// piece.
+    /// `point_chunk_len` points); empty for a layer kept in one piece.
     pub point_chunks: Vec<PointChunkRef>,
+    /// Points per chunk of a chunked layer (a power of two up to
+    /// [`MAX_POINT_CHUNK_LEN`](super::MAX_POINT_CHUNK_LEN)); 0 for a layer in one piece.
+    pub point_chunk_len: u32,
     /// Parent id of each row (`u64::MAX` for none).
     pub parents: Vec<u64>,
     /// CSR offsets into `children`.
@@ -107,7 +109,7 @@ pub struct PointChunk {
     pub index: u32,
     /// The chunk's generation (see [`PointChunkRef::generation`]).
     pub generation: u64,
-    /// The points at column positions `index * POINT_CHUNK_LEN ..`.
+    /// The points at column positions `index * point_chunk_len ..` of the layer.
     pub points: Vec<[f32; 3]>,
 }
 

@@ -7,7 +7,7 @@
     reason = "re-deriving references to bytes validated before"
 )]
 
-use super::chunk::{POINT_CHUNK_LEN, check_chunk_refs, chunk_error};
+use super::chunk::{MAX_POINT_CHUNK_LEN, check_chunk_refs, chunk_error};
 use super::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, FORMAT_VERSION, u32s, u64s,
 };
@@ -69,7 +69,7 @@ pub fn validate_layer<'a>(
 }
 
 /// Validates point-chunk bytes (bytecheck, version, at most
-/// [`POINT_CHUNK_LEN`] points, not empty). Whether the chunk is the one its layer segment
+/// [`MAX_POINT_CHUNK_LEN`] points, not empty). Whether the chunk is the one its layer segment
 /// names is checked when the cut is joined ([`super::ArchivedScene::new`]).
 ///
 /// # Errors
@@ -88,11 +88,11 @@ pub fn validate_chunk<'a>(
             expected: FORMAT_VERSION,
         });
     }
-    if c.points.is_empty() || c.points.len() > POINT_CHUNK_LEN {
+    if c.points.is_empty() || c.points.len() > MAX_POINT_CHUNK_LEN {
         return Err(chunk_error(
             what,
             format!(
-                "a point chunk holds {} points (1 to {POINT_CHUNK_LEN})",
+                "a point chunk holds {} points (1 to {MAX_POINT_CHUNK_LEN})",
                 c.points.len()
             ),
         ));
@@ -156,7 +156,7 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
     } else if !l.points.is_empty() {
         return Err("a chunked layer also holds points inline".into());
     } else {
-        check_chunk_refs(&l.point_chunks)?
+        check_chunk_refs(&l.point_chunks, l.point_chunk_len.to_native())?
     };
     check_offsets("point_offsets", u32s(&l.point_offsets), rows, points)?;
     if l.parents.len() != rows {

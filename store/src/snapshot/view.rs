@@ -1,14 +1,14 @@
 //! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
 
-use super::chunk::{POINT_CHUNK_LEN, check_chunk_matches, chunk_points};
+use super::chunk::{check_chunk_matches, chunk_points};
 use super::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, NO_PARENT, u32s, u64s,
 };
 use super::validate::{check_dag, layer_position};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
-use crate::view::{EdgeRef, SceneView};
 use crate::points::PointColumn;
+use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, Points};
 use rkyv::collections::swiss_table::ArchivedHashMap;
 use rkyv::string::ArchivedString;
@@ -143,7 +143,9 @@ impl<'a> ArchivedScene<'a> {
         match self.chunk_start.get(l..=l + 1) {
             Some(&[a, b]) if a < b => PointColumn::Chunked {
                 chunks: self.chunks.get(a as usize..b as usize).unwrap_or(&[]),
-                chunk_len: POINT_CHUNK_LEN,
+                // At least 1 so that a position's chunk is defined even in a cut no
+                // check accepted.
+                chunk_len: (self.layers[l].point_chunk_len.to_native() as usize).max(1),
             },
             _ => PointColumn::Inline(bytemuck::cast_slice(self.layers[l].points.as_slice())),
         }
