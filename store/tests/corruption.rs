@@ -3,9 +3,11 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use ygg_store::index::SpatialIndex;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::{
-    ArchivedScene, Manifest, SegmentBytes, archive, validate_layer, validate_manifest,
+    ArchivedScene, LayerSegment, Manifest, PointChunk, PointChunkRef, SegmentBytes, archive,
+    validate_chunk, validate_layer, validate_manifest,
 };
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
@@ -216,4 +218,156 @@ fn inconsistent_manifests_are_refused_naming_what_is_wrong() {
     m.layers.swap(0, 1);
     let e = check_cut(&g, &m).unwrap_err();
     assert!(e.contains("does not match segment"), "{e}");
+}
+
+/// The sample scene's segments with every layer's point column split into chunks of 4
+/// points (as a publishing writer splits a large layer), before archiving: the
+/// manifest, the layer segments, and the chunks in layer and column order.
+fn chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<PointChunk>) {
+    let mut layers = Vec::new();
+    let mut chunks = Vec::new();
+    for l in g.layers() {
+        let mut s = g.layer_segment(l);
+        if s.points.len() > 4 {
+            for (i, c) in s.points.chunks(4).enumerate() {
+                s.point_chunks.push(PointChunkRef {
+                    generation: s.generation,
+                    len: c.len() as u32,
+                });
+                chunks.push(PointChunk::new(l, i, s.generation, c));
+            }
+            s.point_chunk_len = 4;
+            s.points.clear();
+        }
+        layers.push(s);
+    }
+    (g.manifest(1), layers, chunks)
+}
+
+/// Archives and checks a cut as a reader does (bytecheck of every segment, then
+/// `ArchivedScene::new`), then reads every node's points; the number of points read.
+fn check_chunked_cut(
+    manifest: &SegmentBytes,
+    layers: &[SegmentBytes],
+    chunks: &[SegmentBytes],
+) -> Result<usize, String> {
+    let manifest = validate_manifest(manifest, "manifest").map_err(|e| e.to_string())?;
+    let layers = layers
+        .iter()
+        .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let chunks = chunks
+        .iter()
+        .map(|b| validate_chunk(b, "chunk").map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let view = ArchivedScene::new(manifest, layers, chunks)?;
+    let mut points = 0;
+    for l in view.layers() {
+        for n in view.layer_nodes(l) {
+            points += view.points(n).iter().count();
+        }
+        if let Some(index) = view.layer_index(l) {
+            points += index.len();
+        }
+    }
+    Ok(points)
+}
+
+fn archive_cut(
+    cut: &(Manifest, Vec<LayerSegment>, Vec<PointChunk>),
+) -> (SegmentBytes, Vec<SegmentBytes>, Vec<SegmentBytes>) {
+    (
+        archive(&cut.0),
+        cut.1.iter().map(archive).collect(),
+        cut.2.iter().map(archive).collect(),
+    )
+}
+
+#[test]
+fn inconsistent_point_chunks_are_refused_naming_what_is_wrong() {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    let cut = chunked_cut(&g);
+    assert!(cut.2.len() > 4, "the objects layer is chunked");
+    let (m, l, c) = archive_cut(&cut);
+    let points = check_chunked_cut(&m, &l, &c).expect("the intact cut is accepted");
+    assert_eq!(points, 2 * 30, "every node's points and the layer index's");
+
+    let e = check_chunked_cut(&m, &l, &c[..c.len() - 1]).unwrap_err();
+    assert!(e.contains("names point chunk 7, not given"), "{e}");
+
+    let mut more = c.clone();
+    more.push(c[0].clone());
+    let e = check_chunked_cut(&m, &l, &more).unwrap_err();
+    assert!(
+        e.contains("1 point chunks given that no layer names"),
+        "{e}"
+    );
+
+    let mut swapped = c.clone();
+    swapped.swap(0, 1);
+    let e = check_chunked_cut(&m, &l, &swapped).unwrap_err();
+    assert!(
+        e.contains("chunk 1, generation") && e.contains("names chunk 0"),
+        "{e}"
+    );
+
+    // A chunk of another generation (held from an older cut).
+    let mut older = chunked_cut(&g);
+    older.2[3].generation -= 1;
+    let (_, _, stale) = archive_cut(&older);
+    let e = check_chunked_cut(&m, &l, &stale).unwrap_err();
+    assert!(e.contains("names chunk 3 at generation"), "{e}");
+
+    // Heads that lie about their chunks.
+    let head = |tamper: fn(&mut LayerSegment)| {
+        let mut cut = chunked_cut(&g);
+        tamper(&mut cut.1[2]);
+        let (m, l, c) = archive_cut(&cut);
+        check_chunked_cut(&m, &l, &c).unwrap_err()
+    };
+    let e = head(|s| s.point_chunk_len = 3);
+    assert!(e.contains("a power of two"), "{e}");
+    let e = head(|s| s.point_chunks[2].len = 3);
+    assert!(e.contains("point chunk 2 of 8 holds 3 points"), "{e}");
+    let e = head(|s| s.point_chunks.last_mut().unwrap().len = 0);
+    assert!(e.contains("holds 0 points"), "{e}");
+    let e = head(|s| s.points.push([0.0; 3]));
+    assert!(e.contains("also holds points inline"), "{e}");
+    let e = head(|s| s.point_offsets.last_mut().map(|o| *o += 1).unwrap());
+    assert!(e.contains("point_offsets"), "{e}");
+}
+
+#[test]
+fn random_corruptions_of_point_chunks_never_panic() {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    let (m, l, c) = archive_cut(&chunked_cut(&g));
+    let mut rng = ChaCha8Rng::seed_from_u64(0xC4);
+    let (mut accepted, mut refused) = (0, 0);
+    for _ in 0..2000 {
+        let mut chunks = c.clone();
+        let k = rng.gen_range(0..chunks.len());
+        let b = &mut chunks[k];
+        let i = rng.gen_range(0..b.len() - 4);
+        match rng.gen_range(0..3) {
+            0 => b[i] ^= 1 << rng.gen_range(0..8),
+            1 => b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes()),
+            _ => b[i..i + 4].copy_from_slice(&(rng.r#gen::<u32>() % 64).to_le_bytes()),
+        }
+        match check_chunked_cut(&m, &l, &chunks) {
+            Ok(_) => accepted += 1,
+            Err(e) => {
+                assert!(!e.is_empty());
+                refused += 1;
+            }
+        }
+    }
+    // Flips inside coordinates still validate; flips in the structure are refused.
+    assert!(
+        accepted > 100 && refused > 100,
+        "accepted {accepted}, refused {refused}"
+    );
 }

@@ -3,12 +3,14 @@
 //! processes and in-process readers querying validated snapshots, corrupted archives
 //! refused, and the demo stopped by Ctrl-C leaving nothing behind.
 
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use rustix::process::Signal;
 use ygg_dsg::layout;
 use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
+use ygg_store::snapshot::is_chunk_segment_id;
 use ygg_store::{SceneView, Scope};
 use ygg_testkit::{Proc, TestScene, Watchdog};
 use ygg_transport::PublisherBuilder;
@@ -259,4 +261,76 @@ fn a_scene_growing_past_its_writers_layer_bound_is_refused_and_kept() {
     assert_eq!(fresh.view().layers().count(), writer.max_layers());
     drop((first, fresh, reader, writer));
     scene.assert_no_leftovers(STEP);
+}
+
+#[test]
+fn a_growing_mesh_resends_only_its_changed_chunks_and_readers_validate_only_those() {
+    let scene = TestScene::new("chunks");
+    let watchdog = Watchdog::new(WATCHDOG);
+    // Chunks of 64 points: the office at this scale has meshes of a few hundred points.
+    let mut writer = spawn_serve(
+        &scene,
+        &watchdog,
+        &["--rate", "60", "--seconds", "60", "--point-chunk-len", "64"],
+    );
+    writer.expect_line(STEP, |l| l.contains("\"ready\""));
+    let mut reader = attach(&scene);
+    let mut previous = snapshot_after(&mut reader, 1);
+    let segment_generations = |s: &SceneSnapshot| -> BTreeMap<u32, u64> {
+        s.raw()
+            .layers()
+            .map(|(e, _)| (e.layer_id, e.generation))
+            .collect()
+    };
+    let (mut grown, mut chunks_held, mut chunks_resent) = (0, 0, 0);
+    let until = Instant::now() + STEP;
+    while grown < 3 {
+        assert!(Instant::now() < until, "no mesh grew ({grown} seen)");
+        let validated = reader.validations();
+        let next = snapshot_after(&mut reader, previous.generation() + 1);
+        let (before, after) = (segment_generations(&previous), segment_generations(&next));
+        let new: Vec<u32> = after
+            .iter()
+            .filter(|(id, g)| before.get(id) != Some(g))
+            .map(|(id, _)| *id)
+            .collect();
+        // Exactly the segments the cut changed are validated; the rest are kept.
+        assert_eq!(reader.validations() - validated, new.len() as u64);
+        let chunks = after.keys().filter(|id| is_chunk_segment_id(**id)).count();
+        chunks_held += chunks;
+        chunks_resent += new.iter().filter(|id| is_chunk_segment_id(**id)).count();
+        // A grown mesh node keeps its old points and gains a tail, read across chunks.
+        let (old, now) = (previous.view(), next.view());
+        for layer in now.layers() {
+            if !now
+                .layer_name(layer)
+                .is_some_and(|n| n.ends_with("unclaimed-mesh"))
+            {
+                continue;
+            }
+            for n in now.layer_nodes(layer) {
+                let id = now.node_id(n);
+                let points = now.points(n).to_vec();
+                let Some(before) = old.node(id).map(|o| old.points(o).to_vec()) else {
+                    continue;
+                };
+                if points.len() > before.len() {
+                    assert_eq!(points[..before.len()], before[..], "node {id}");
+                    assert!(now.points(n).runs().count() > 1, "node {id} is chunked");
+                    grown += 1;
+                }
+            }
+        }
+        previous = next;
+    }
+    assert!(chunks_held > 0, "no layer was chunked");
+    assert!(
+        chunks_resent * 4 < chunks_held,
+        "{chunks_resent} of {chunks_held} chunks resent"
+    );
+    drop(previous);
+    drop(reader);
+    writer.signal(Signal::TERM);
+    assert!(writer.wait_exit(STEP).success());
+    scene.assert_no_leftovers(Duration::from_secs(5));
 }

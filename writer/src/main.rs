@@ -96,6 +96,11 @@ struct Serve {
     /// a lower bound makes readers attach faster.
     #[arg(long)]
     max_layers: Option<usize>,
+    /// Points per chunk of a layer published in chunks (a power of two; layers of more
+    /// points send their point column in chunks, each resent only when it changes).
+    #[arg(long, default_value_t = ygg_store::snapshot::POINT_CHUNK_LEN as u64,
+          value_parser = clap::value_parser!(u64).range(1..=65536))]
+    point_chunk_len: u64,
 }
 
 #[derive(Parser, Debug)]
@@ -276,7 +281,9 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let loaded = t.elapsed();
-    let builder = SceneWriter::builder(&args.scene).max_readers(args.max_readers);
+    let builder = SceneWriter::builder(&args.scene)
+        .max_readers(args.max_readers)
+        .point_chunk_len(args.point_chunk_len as usize);
     let builder = match args.max_layers {
         Some(n) => builder.max_layers(n),
         None => builder,

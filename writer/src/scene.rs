@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
-use ygg_store::snapshot::{MAX_LAYER_ID, SegmentCache};
+use ygg_store::snapshot::{MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentCache};
 use ygg_store::{LayerId, SceneGraph, SceneView};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
@@ -53,6 +53,7 @@ pub struct SceneWriter {
 pub struct SceneWriterBuilder {
     publisher: PublisherBuilder,
     max_layers: Option<usize>,
+    point_chunk_len: usize,
 }
 
 /// Least room for more layers a writer gets by default ([`SceneWriterBuilder::max_layers`]).
@@ -78,15 +79,26 @@ impl SceneWriterBuilder {
         self
     }
 
-    /// Most layers the scene may have while this writer publishes it (default: a quarter
-    /// more than the graph given to [`create`](Self::create) has, and at least 64 more; see
-    /// [`default_max_layers`]).
+    /// Most segments a snapshot may have while this writer publishes it: its layers plus
+    /// the point chunks of its chunked layers ([`Self::point_chunk_len`]). Default: a
+    /// quarter more than the graph given to [`create`](Self::create) takes, and at least 64
+    /// more; see [`default_max_layers`].
     /// A publish of more fails with [`PublishError::TooManyLayers`]. The bound sizes the
     /// shared-memory pool and what every reader initialises when it attaches (attaching to
     /// the office took 15 ms at 128 and 25 ms at 512), so set it for a scene that is
     /// created small and grows, and leave it otherwise.
     pub fn max_layers(mut self, value: usize) -> Self {
         self.max_layers = Some(value);
+        self
+    }
+
+    /// Points per chunk of a chunked layer (default [`POINT_CHUNK_LEN`]; rounded up to a
+    /// power of two, at most [`ygg_store::snapshot::MAX_POINT_CHUNK_LEN`]). A layer of
+    /// more points publishes its point column as chunks, each resent only when its points
+    /// change: appending to a mesh resends the last chunk, not the layer. Smaller chunks
+    /// resend less per change but add segments to every cut.
+    pub fn point_chunk_len(mut self, value: usize) -> Self {
+        self.point_chunk_len = value.clamp(1, MAX_POINT_CHUNK_LEN).next_power_of_two();
         self
     }
 
@@ -127,10 +139,10 @@ impl SceneWriterBuilder {
     pub fn create(self, graph: SceneGraph) -> Result<SceneWriter, WriterCreateError> {
         let max_layers = self
             .max_layers
-            .unwrap_or_else(|| default_max_layers(graph.snapshot_segments()));
+            .unwrap_or_else(|| default_max_layers(graph.snapshot_segments(self.point_chunk_len)));
         Ok(SceneWriter {
             graph,
-            segments: SegmentCache::new(),
+            segments: SegmentCache::with_point_chunk_len(self.point_chunk_len),
             publisher: self.publisher.max_segments(max_layers).create()?,
             published_segments: BTreeSet::new(),
             generation: 0,
@@ -145,10 +157,12 @@ impl SceneWriter {
         SceneWriterBuilder {
             publisher: PublisherBuilder::new(scene),
             max_layers: None,
+            point_chunk_len: POINT_CHUNK_LEN,
         }
     }
 
-    /// Most layers a publish may name ([`SceneWriterBuilder::max_layers`]).
+    /// Most segments (layers and point chunks) a publish may name
+    /// ([`SceneWriterBuilder::max_layers`]).
     pub fn max_layers(&self) -> usize {
         self.publisher.max_segments()
     }

@@ -69,6 +69,54 @@ impl AgentMover {
     }
 }
 
+/// Grows and shrinks the office's largest unclaimed-mesh node at its end, as SLAM
+/// extends a mesh: 64 new vertices on even ticks, the same 64 taken off on odd ones (so
+/// that the layer keeps its size over a long run). Only the node's layer changes, and
+/// only at the end of its point column.
+pub struct MeshGrower {
+    node: NodeId,
+    base: Vec<Point>,
+}
+
+/// Vertices [`MeshGrower`] appends per tick (what the SLAM stream adds per mesh patch).
+pub const MESH_PATCH: usize = 64;
+
+impl MeshGrower {
+    /// The largest node of `g`'s unclaimed-mesh layers.
+    pub fn new(g: &SceneGraph) -> Res<Self> {
+        let (node, base) = g
+            .layers()
+            .filter(|&l| {
+                g.layer_name(l)
+                    .is_some_and(|n| n.ends_with("unclaimed-mesh"))
+            })
+            .flat_map(|l| g.layer_nodes(l))
+            .max_by_key(|&n| g.points(n).len())
+            .map(|n| (g.node_id(n), g.points(n).to_vec()))
+            .ok_or("the office has no unclaimed mesh")?;
+        Ok(MeshGrower { node, base })
+    }
+
+    /// Points of the node before the first tick.
+    pub fn base_points(&self) -> usize {
+        self.base.len()
+    }
+
+    /// Appends (even `tick`) or removes (odd) the last [`MESH_PATCH`] vertices.
+    pub fn step(&mut self, g: &mut SceneGraph, tick: u64) -> Res<()> {
+        let mut points = self.base.clone();
+        if tick.is_multiple_of(2) {
+            let z = 0.001 * (tick % 1000) as f32;
+            points.extend((0..MESH_PATCH).map(|k| {
+                let p = self.base[k % self.base.len()];
+                [p[0], p[1], p[2] + z]
+            }));
+        }
+        g.set_geometry(self.node, points)?;
+        Ok(())
+    }
+}
+
 /// Changes every layer: adds (even `tick`) or removes (odd) one geometry-less node per
 /// layer, so that every layer is republished.
 pub fn touch_all_layers(g: &mut SceneGraph, tick: u64) -> Res<()> {

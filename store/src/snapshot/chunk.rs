@@ -37,7 +37,7 @@ pub const MAX_LAYER_ID: u32 = CHUNK_ID_BIT - 1;
 /// chunked that far.
 pub fn chunk_segment_id(layer: LayerId, index: usize) -> Option<u32> {
     (layer.0 < CHUNKABLE_LAYERS && index < MAX_CHUNKS_PER_LAYER)
-        .then(|| CHUNK_ID_BIT | layer.0 << CHUNK_INDEX_BITS | index as u32)
+        .then_some(CHUNK_ID_BIT | layer.0 << CHUNK_INDEX_BITS | index as u32)
 }
 
 /// Whether a segment id names a chunk (not a layer, not the manifest).
@@ -135,16 +135,16 @@ pub(crate) fn check_chunk_matches(
 }
 
 impl crate::SceneGraph {
-    /// Segments a snapshot of this graph takes when published with the default chunk
-    /// length: one per layer, plus the point chunks of each chunked layer (for sizing a
-    /// publisher's bound on segments per cut).
-    pub fn snapshot_segments(&self) -> usize {
+    /// Segments a snapshot of this graph takes when published in point chunks of
+    /// `chunk_len` ([`POINT_CHUNK_LEN`] by default): one per layer, plus the point chunks
+    /// of each chunked layer (for sizing a publisher's bound on segments per cut).
+    pub fn snapshot_segments(&self, chunk_len: usize) -> usize {
         self.layers
             .iter()
             .map(|(&id, l)| {
                 let points = l.nodes.iter().map(|n| self.nodes[n].points.len()).sum();
-                1 + if is_chunked(id, points, POINT_CHUNK_LEN) {
-                    chunk_count(points, POINT_CHUNK_LEN)
+                1 + if is_chunked(id, points, chunk_len) {
+                    chunk_count(points, chunk_len)
                 } else {
                     0
                 }

@@ -8,6 +8,7 @@ use super::{Plan, Scene};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 use ygg_store::SceneGraph;
+use ygg_store::snapshot::POINT_CHUNK_LEN;
 use ygg_writer::SceneWriter;
 
 /// The layer the readers' nearest-node query runs on: the office's places (waypoints).
@@ -24,10 +25,23 @@ pub(crate) fn writer(
     max_readers: usize,
     segment_bytes: usize,
 ) -> Res<SceneWriter> {
+    writer_chunked(scene, graph, max_readers, segment_bytes, POINT_CHUNK_LEN)
+}
+
+/// A [`writer`] whose layers of more than `point_chunk_len` points are published in
+/// chunks of that many.
+pub(crate) fn writer_chunked(
+    scene: &Scene,
+    graph: SceneGraph,
+    max_readers: usize,
+    segment_bytes: usize,
+    point_chunk_len: usize,
+) -> Res<SceneWriter> {
     let mut w = SceneWriter::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)
         .max_readers(max_readers)
         .initial_segment_bytes(segment_bytes)
+        .point_chunk_len(point_chunk_len)
         .create(graph)?;
     w.publish()?;
     Ok(w)
@@ -53,7 +67,21 @@ impl Case {
         mode: &str,
         query: Option<&str>,
     ) -> Res<Case> {
-        let w = writer(scene, graph, n + 1, segment_bytes)?;
+        Self::start_chunked(scene, graph, segment_bytes, n, mode, query, POINT_CHUNK_LEN)
+    }
+
+    /// [`Case::start`] with a writer that chunks layers of more than `point_chunk_len`
+    /// points.
+    pub(super) fn start_chunked(
+        scene: &Scene,
+        graph: SceneGraph,
+        segment_bytes: usize,
+        n: usize,
+        mode: &str,
+        query: Option<&str>,
+        point_chunk_len: usize,
+    ) -> Res<Case> {
+        let w = writer_chunked(scene, graph, n + 1, segment_bytes, point_chunk_len)?;
         let readers = Readers::spawn(n, scene, &reader_args(mode, query), ATTACH_TIMEOUT)?;
         Ok(Case { w, readers })
     }

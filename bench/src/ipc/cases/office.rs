@@ -5,12 +5,27 @@ use super::super::{Res, scenes};
 use super::drive::{Case, QUERY_LAYER};
 use super::{Ctx, in_scene};
 use ygg_dsg::layout::Layout;
+use ygg_store::snapshot::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN};
 
 pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let agents = scenes::agents_segment_bytes(&ctx.office()?.1)?;
     let samples = ctx.plan.office_samples;
     let mut rows = vec![super::bare::case_bare(ctx, agents, samples)?];
     rows.extend(case_office_mint(ctx)?);
+    for (name, what, chunk_len) in [
+        (
+            "mesh_append_office",
+            "office (mint): 64 vertices appended to (or taken off) the largest unclaimed mesh node; its layer's point column in chunks of 8192 points, only the last chunk and the small layer segment republished → first query answered",
+            POINT_CHUNK_LEN,
+        ),
+        (
+            "mesh_append_office_unchunked",
+            "reference: the same with the layer in one piece (as before chunked layers): the whole mesh layer republished",
+            MAX_POINT_CHUNK_LEN,
+        ),
+    ] {
+        rows.push(case_mesh_append(ctx, name, what, chunk_len)?);
+    }
     let samples = ctx.plan.attach_samples;
     let graph = ctx.office_mint()?;
     rows.extend(super::attach::case_attach(
@@ -50,6 +65,35 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
         ))
     })?);
     Ok(rows)
+}
+
+/// A mesh growing at its end, published with layers chunked at `chunk_len` points.
+fn case_mesh_append(ctx: &mut Ctx, name: &str, what: &str, chunk_len: usize) -> Res<Row> {
+    let graph = ctx.office_mint()?;
+    in_scene(ctx, "office-mesh", |ctx, scene| {
+        let mut grower = scenes::MeshGrower::new(&graph)?;
+        let base = grower.base_points();
+        let mut case = Case::start_chunked(
+            scene,
+            graph,
+            64 * 1024,
+            1,
+            "latency",
+            Some(QUERY_LAYER),
+            chunk_len,
+        )?;
+        let samples = ctx.plan.office_samples;
+        let o = case.observe(&ctx.plan, 5, samples, &mut |g, i| grower.step(g, i))?;
+        case.finish()?;
+        let (vm, vp) = median_p99_us(&o.visible);
+        Ok(o.annotate(
+            Row::latency(name, what, &o.all_answered)
+                .with("visible_median_us", vm)
+                .with("visible_p99_us", vp)
+                .with("layers_sent", median(&o.layers_sent))
+                .with("mesh_points", base as f64),
+        ))
+    })
 }
 
 fn case_office_mint(ctx: &mut Ctx) -> Res<Vec<Row>> {
