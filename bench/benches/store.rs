@@ -181,5 +181,64 @@ fn segments(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, updates, labels, open, segments);
+/// The writer's publish work when SLAM appends 64 vertices to the office's largest
+/// unclaimed mesh node (and takes them off again, alternately): the layer brought up to
+/// date and everything that changed archived, with the layer's point column in chunks
+/// of 8192 points (only the last chunk changes) and in one piece (the whole layer).
+fn mesh_append(c: &mut Criterion) {
+    use ygg_store::snapshot::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentBytes, SegmentCache};
+    let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
+        seed: 7,
+        scale: 1.0,
+    });
+    let g = ygg_dsg::layout::build(&dsg, ygg_dsg::layout::Layout::Mint).unwrap();
+    let (layer, node) = g
+        .layers()
+        .filter(|&l| {
+            g.layer_name(l)
+                .is_some_and(|n| n.ends_with("unclaimed-mesh"))
+        })
+        .flat_map(|l| g.layer_nodes(l).map(move |n| (l, n)))
+        .max_by_key(|&(_, n)| g.points(n).len())
+        .map(|(l, n)| (l, g.node_id(n)))
+        .unwrap();
+    let base = g.points(g.node(node).unwrap()).to_vec();
+    let mut group = c.benchmark_group("mesh_append");
+    for (name, chunk_len) in [
+        ("chunked", POINT_CHUNK_LEN),
+        ("one_piece", MAX_POINT_CHUNK_LEN),
+    ] {
+        let mut live = g.clone();
+        let mut cache = SegmentCache::with_point_chunk_len(chunk_len);
+        let mut buf = SegmentBytes::with_capacity(1 << 20);
+        let mut sent = std::collections::HashMap::new();
+        let mut step = 0u64;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                step += 1;
+                let mut points = base.clone();
+                if step.is_multiple_of(2) {
+                    points.extend_from_slice(&base[..64]);
+                }
+                live.set_geometry(node, points).unwrap();
+                let published = cache.published_layer(&mut live, layer);
+                let mut bytes = published.segment.archived_len();
+                buf.resize(bytes, 0);
+                published.segment.archive_into(&mut buf).unwrap();
+                for (i, (id, generation)) in published.chunks().enumerate() {
+                    if sent.insert(id, generation) != Some(generation) {
+                        let chunk = published.chunk(i);
+                        let len = chunk.archived_len();
+                        buf.resize(len, 0);
+                        bytes += chunk.archive_into(&mut buf).unwrap();
+                    }
+                }
+                bytes
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, updates, labels, open, segments, mesh_append);
 criterion_main!(benches);

@@ -401,7 +401,13 @@ impl SceneGraph {
     /// Unknown node or a non-finite coordinate.
     pub fn set_geometry(&mut self, id: NodeId, points: Vec<Point>) -> EditResult {
         self.node(id)?;
-        if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        // A flat pass the compiler vectorises; the position only when it fails.
+        let flat: &[f32] = bytemuck::cast_slice(&points);
+        if !flat.iter().fold(true, |ok, c| ok & c.is_finite()) {
+            let index = points
+                .iter()
+                .position(|p| !p.iter().all(|c| c.is_finite()))
+                .unwrap_or_default();
             return Err(GraphEditError::NonFinitePoint { node: id, index });
         }
         let node = self.nodes.get_mut(&id).expect("checked");

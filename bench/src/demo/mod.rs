@@ -29,6 +29,11 @@ pub struct DemoArgs {
     /// Writer update ticks per second.
     #[arg(long, default_value_t = 30.0)]
     pub rate: f64,
+    /// Points per chunk of the writer's chunked layers (its `--point-chunk-len`; 65536
+    /// keeps the office's meshes in one piece, as before chunked layers).
+    #[arg(long, default_value_t = ygg_store::snapshot::POINT_CHUNK_LEN as u64,
+          value_parser = clap::value_parser!(u64).range(1..=65536))]
+    pub point_chunk_len: u64,
     /// Also write the summary as JSON here (`readers`: per reader `visible_p50_us`,
     /// `visible_p99_us`, `checked`, `matched`; `writer`: `update_us_mean`,
     /// `publish_us_mean`, `updates_per_s`).
@@ -201,12 +206,13 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         "Yggdrasil demo: one writer, {} readers, scene {}, {:.0} s",
         args.readers, scene.name, args.seconds
     );
+    let chunk_len = args.point_chunk_len.to_string();
     let writer = start_writer(
         &scene,
         args.rate,
         args.scale,
         args.seconds + 30.0,
-        &[],
+        &["--point-chunk-len", &chunk_len],
         "writer",
     )?;
     let mut procs = vec![Member {

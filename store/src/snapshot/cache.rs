@@ -285,9 +285,9 @@ fn patched(
     ids.extend_from_slice(&old.ids);
     ids.extend_from_slice(&appended);
     let point_changes = PointChanges::find(graph, &old, &dirty_rows, &ids, cut_points);
-    chunks.changed.note_patch(graph, &old, &dirty_rows, &ids);
+    let points_kept = chunks.changed.note_patch(graph, &old, &dirty_rows, &ids);
 
-    let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &ids) {
+    let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &points_kept, &ids) {
         Some(terms_changed) => {
             for (row, &id) in ids.iter().enumerate().skip(old_rows) {
                 graph.push_row(
@@ -363,12 +363,14 @@ const MAX_SPLICED: usize = 32;
 /// spliced in where they do not (an edge or child added: the odometry edge to the
 /// previous pose, a pose nested under a place). Returns whether the postings must be
 /// rebuilt (labels or keys changed), or `None`, changing no row, when more than
-/// [`MAX_SPLICED`] rows change length. `ids` are the new sorted ids.
+/// [`MAX_SPLICED`] rows change length. `ids` are the new sorted ids; `points_kept`, per
+/// dirty row, how many of its leading points are unchanged.
 fn rows_in_place(
     graph: &SceneGraph,
     seg: &mut LayerSegment,
     table: &mut StringTable,
     dirty_rows: &[usize],
+    points_kept: &[usize],
     ids: &[u64],
 ) -> Option<bool> {
     let mut fresh = Vec::with_capacity(dirty_rows.len());
@@ -401,7 +403,7 @@ fn rows_in_place(
         fresh.push(one);
     }
     let mut terms_changed = false;
-    for (&row, one) in dirty_rows.iter().zip(&fresh) {
+    for ((&row, one), &kept) in dirty_rows.iter().zip(&fresh).zip(points_kept) {
         let points = &graph.nodes[&NodeId(ids[row])].points;
         let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
         let r = at(&seg.label_offsets);
@@ -419,8 +421,10 @@ fn rows_in_place(
             r.len(),
             one.feature_keys.len(),
         );
+        // The leading points that stayed as they were are not rewritten (a mesh node
+        // growing at its end).
         let r = at(&seg.point_offsets);
-        splice(&mut seg.points, r.clone(), points);
+        splice(&mut seg.points, r.start + kept..r.end, &points[kept..]);
         shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
         let r = at(&seg.child_offsets);
         splice(&mut seg.children, r.clone(), &one.children);
