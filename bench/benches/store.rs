@@ -184,7 +184,7 @@ fn segments(c: &mut Criterion) {
 /// The writer's publish work when SLAM appends 64 vertices to the office's largest
 /// unclaimed mesh node (and takes them off again, alternately): the layer brought up to
 /// date and everything that changed archived, with the layer's point column in chunks
-/// of 8192 points (only the last chunk changes) and in one piece (the whole layer).
+/// of 32,768 points (only the last chunk changes) and in one piece (the whole layer).
 fn mesh_append(c: &mut Criterion) {
     use ygg_store::snapshot::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentBytes, SegmentCache};
     let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {

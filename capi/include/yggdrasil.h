@@ -658,7 +658,7 @@ enum ygg_status ygg_snapshot_node_layer(const struct ygg_snapshot *snapshot,
 
 // A node's geometry: `*xyz` points to `3 * *count` floats (x y z of each point), null
 // when the node has no points. Zero-copy (the snapshot's bytes) unless the node's points
-// cross a chunk boundary of a chunked layer (a mesh node of more than 8192 points): then
+// cross a chunk boundary of a chunked layer (a mesh node of more than 32,768 points by default): then
 // a copy in one piece, made once and owned by the snapshot.
 //
 // Ownership: the points belong to the snapshot: valid while the snapshot handle lives;

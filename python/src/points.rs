@@ -17,7 +17,7 @@ use crate::scene::Scene;
 /// A read-only `(n, 3)` `float32` array over node `id`'s points in `scene`'s snapshot,
 /// whose numpy base is the `Scene` object: the snapshot stays mapped while it lives. A
 /// node whose points lie in several chunks of a chunked layer (a mesh node of more than
-/// 8192 points) gets a read-only copy instead.
+/// 32,768 points by default) gets a read-only copy instead.
 pub fn points_array<'py>(
     scene: &Bound<'py, Scene>,
     id: NodeId,

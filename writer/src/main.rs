@@ -305,6 +305,7 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let mut next = start + period;
     let (mut ticks, mut update_ns, mut publish_ns, mut bytes) = (0u64, 0u128, 0u128, 0usize);
+    let (mut layers_sent, mut chunks_sent) = (0usize, 0usize);
     let mut last_report = start;
     let mut window = window::Window::new(writer.graph(), args.keep);
     let stop_reason = loop {
@@ -323,6 +324,8 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
             update_ns += (t1 - t0).as_nanos();
             publish_ns += t1.elapsed().as_nanos();
             bytes += r.bytes_sent;
+            layers_sent += r.layers_sent;
+            chunks_sent += r.chunks_sent;
             ticks += 1;
         }
         if last_report.elapsed() >= Duration::from_secs(1) {
@@ -352,7 +355,8 @@ fn serve(args: &Serve) -> Result<(), Box<dyn std::error::Error>> {
         "{}",
         serde_json::json!({"event": "summary", "stop": stop_reason, "ticks": ticks, "seconds": secs,
             "updates_per_s": ticks as f64 / secs, "update_us": per(update_ns), "publish_us": per(publish_ns),
-            "bytes_published": bytes, "generation": writer.generation(), "nodes": writer.graph().node_count(),
+            "bytes_published": bytes, "layers_sent": layers_sent, "chunks_sent": chunks_sent,
+            "generation": writer.generation(), "nodes": writer.graph().node_count(),
             "rss_mb": rss_mb()})
     );
     Ok(())

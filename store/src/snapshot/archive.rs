@@ -2,6 +2,7 @@
 //! [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
 //! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
 
+use super::chunk::PointChunkSource;
 use super::schema::{
     FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
     NodeIndexSegment, PointChunk,
@@ -348,6 +349,7 @@ macro_rules! in_place_archiving {
 in_place_archiving!(LayerSegment);
 in_place_archiving!(Manifest);
 in_place_archiving!(PointChunk);
+in_place_archiving!(PointChunkSource<'_>);
 
 impl SceneGraph {
     /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of

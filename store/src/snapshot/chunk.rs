@@ -9,10 +9,15 @@
 
 use super::schema::{ArchivedPointChunk, FORMAT_VERSION, PointChunk};
 use crate::{LayerId, Point, SnapshotError};
+use rkyv::munge::munge;
+use rkyv::rancor::Fallible;
+use rkyv::ser::{Allocator, Writer};
+use rkyv::vec::{ArchivedVec, VecResolver};
+use rkyv::{Archive, Place, Serialize};
 
-/// Points per chunk a publishing writer uses by default (96 KiB of coordinates); layers
+/// Points per chunk a publishing writer uses by default (384 KiB of coordinates); layers
 /// of more points are published chunked.
-pub const POINT_CHUNK_LEN: usize = 8192;
+pub const POINT_CHUNK_LEN: usize = 32_768;
 
 /// Most points per chunk a layer segment may declare.
 pub const MAX_POINT_CHUNK_LEN: usize = 1 << 16;
@@ -63,7 +68,8 @@ pub(crate) fn chunk_range(index: usize, points: usize, chunk_len: usize) -> std:
 }
 
 impl PointChunk {
-    /// Chunk `index` of `layer`'s column `points`, at `generation`.
+    /// Chunk `index` of `layer`'s column `points`, at `generation` (an owned copy; a
+    /// publishing writer archives [`PointChunkSource`] instead).
     pub fn new(layer: LayerId, index: usize, generation: u64, points: &[Point]) -> Self {
         PointChunk {
             version: FORMAT_VERSION,
@@ -72,6 +78,48 @@ impl PointChunk {
             generation,
             points: points.to_vec(),
         }
+    }
+}
+
+/// A point chunk archived straight from the column it is part of: the same archive as
+/// [`PointChunk`], without first copying its points (up to 384 KiB per chunk).
+#[derive(Debug, Clone, Copy)]
+pub struct PointChunkSource<'a> {
+    layer: u32,
+    index: u32,
+    generation: u64,
+    points: &'a [Point],
+}
+
+impl<'a> PointChunkSource<'a> {
+    /// Chunk `index` of `layer`'s column, holding `points`, at `generation`.
+    pub fn new(layer: LayerId, index: usize, generation: u64, points: &'a [Point]) -> Self {
+        PointChunkSource {
+            layer: layer.0,
+            index: index as u32,
+            generation,
+            points,
+        }
+    }
+}
+
+impl Archive for PointChunkSource<'_> {
+    type Archived = ArchivedPointChunk;
+    type Resolver = VecResolver;
+
+    fn resolve(&self, resolver: VecResolver, out: Place<ArchivedPointChunk>) {
+        munge!(let ArchivedPointChunk { version, layer, index, generation, points } = out);
+        FORMAT_VERSION.resolve((), version);
+        self.layer.resolve((), layer);
+        self.index.resolve((), index);
+        self.generation.resolve((), generation);
+        ArchivedVec::resolve_from_len(self.points.len(), resolver, points);
+    }
+}
+
+impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSource<'_> {
+    fn serialize(&self, serializer: &mut S) -> Result<VecResolver, S::Error> {
+        ArchivedVec::serialize_from_slice(self.points, serializer)
     }
 }
 
@@ -163,5 +211,36 @@ pub(crate) fn chunk_error(what: &str, reason: impl Into<String>) -> SnapshotErro
     SnapshotError::Validation {
         what: what.to_owned(),
         reason: reason.into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::snapshot::archive;
+
+    #[test]
+    fn a_chunk_archived_from_its_column_is_the_owned_chunks_archive() {
+        let points: Vec<Point> = (0..1000).map(|i| [i as f32, -(i as f32), 0.5]).collect();
+        for range in [0..1, 0..1000, 17..513] {
+            let owned = PointChunk::new(LayerId(7), 3, 42, &points[range.clone()]);
+            let source = PointChunkSource::new(LayerId(7), 3, 42, &points[range]);
+            assert_eq!(source.archived_len(), owned.archived_len());
+            assert_eq!(&archive(&source)[..], &archive(&owned)[..]);
+        }
+    }
+
+    #[test]
+    fn chunk_ids_sort_after_layers_in_layer_and_column_order() {
+        let a = chunk_segment_id(LayerId(0), 0).unwrap();
+        let b = chunk_segment_id(LayerId(0), 1).unwrap();
+        let c = chunk_segment_id(LayerId(1), 0).unwrap();
+        assert!(MAX_LAYER_ID < a && a < b && b < c);
+        assert!(is_chunk_segment_id(a) && !is_chunk_segment_id(MAX_LAYER_ID));
+        assert!(!is_chunk_segment_id(u32::MAX), "the manifest's id is no chunk");
+        assert_eq!(chunk_segment_id(LayerId(0), MAX_CHUNKS_PER_LAYER), None);
+        assert_eq!(chunk_segment_id(LayerId(CHUNKABLE_LAYERS), 0), None);
+        let last = chunk_segment_id(LayerId(CHUNKABLE_LAYERS - 1), MAX_CHUNKS_PER_LAYER - 1);
+        assert!(last.is_some_and(|id| id != u32::MAX));
     }
 }

@@ -3,8 +3,8 @@
 //! generation ([`ChunkState`]), so that a publish resends only the chunks whose points
 //! changed; and [`PublishedLayer`], a layer as it is published.
 
-use super::chunk::{chunk_count, chunk_range, chunk_segment_id, is_chunked};
-use super::schema::{LayerSegment, PointChunk, PointChunkRef};
+use super::chunk::{PointChunkSource, chunk_count, chunk_range, chunk_segment_id, is_chunked};
+use super::schema::{LayerSegment, PointChunkRef};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 use std::ops::Range;
 
@@ -199,15 +199,15 @@ impl<'c> PublishedLayer<'c> {
             })
     }
 
-    /// Chunk `index` of the column, ready to archive.
+    /// Chunk `index` of the column, ready to archive (its points are not copied).
     ///
     /// # Panics
     /// If the layer has no chunk `index`.
-    pub fn chunk(&self, index: usize) -> PointChunk {
+    pub fn chunk(&self, index: usize) -> PointChunkSource<'c> {
         let r = self.segment.point_chunks[index];
         let chunk_len = self.segment.point_chunk_len as usize;
         let range = chunk_range(index, self.points.len(), chunk_len);
-        PointChunk::new(
+        PointChunkSource::new(
             LayerId(self.segment.layer),
             index,
             r.generation,

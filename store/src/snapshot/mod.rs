@@ -42,8 +42,8 @@ mod view;
 pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
 pub use chunk::{
-    MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, chunk_segment_id,
-    is_chunk_segment_id,
+    MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, PointChunkSource,
+    chunk_segment_id, is_chunk_segment_id,
 };
 pub use chunk_state::PublishedLayer;
 pub use file::{FILE_MAGIC, SnapshotFile};

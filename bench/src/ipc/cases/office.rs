@@ -15,7 +15,7 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
     for (name, what, chunk_len) in [
         (
             "mesh_append_office",
-            "office (mint): 64 vertices appended to (or taken off) the largest unclaimed mesh node; its layer's point column in chunks of 8192 points, only the last chunk and the small layer segment republished → first query answered",
+            "office (mint): 64 vertices appended to (or taken off) the largest unclaimed mesh node; its layer's point column in chunks of 32,768 points (the default), only the last chunk and the small layer segment republished → first query answered",
             POINT_CHUNK_LEN,
         ),
         (
