@@ -237,7 +237,10 @@ mod tests {
         let c = chunk_segment_id(LayerId(1), 0).unwrap();
         assert!(MAX_LAYER_ID < a && a < b && b < c);
         assert!(is_chunk_segment_id(a) && !is_chunk_segment_id(MAX_LAYER_ID));
-        assert!(!is_chunk_segment_id(u32::MAX), "the manifest's id is no chunk");
+        assert!(
+            !is_chunk_segment_id(u32::MAX),
+            "the manifest's id is no chunk"
+        );
         assert_eq!(chunk_segment_id(LayerId(0), MAX_CHUNKS_PER_LAYER), None);
         assert_eq!(chunk_segment_id(LayerId(CHUNKABLE_LAYERS), 0), None);
         let last = chunk_segment_id(LayerId(CHUNKABLE_LAYERS - 1), MAX_CHUNKS_PER_LAYER - 1);
