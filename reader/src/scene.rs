@@ -137,7 +137,9 @@ type SegmentIdentity = (u64, u64, usize, usize);
 /// A reader of one scene: receives snapshots and validates what is new in them.
 pub struct SceneReader {
     subscriber: SegmentSubscriber,
-    validated: HashMap<u32, SegmentIdentity>,
+    /// The identity of each segment of the current snapshot, ascending by segment id (as a
+    /// cut lists them): what a newer cut need not validate again.
+    validated: Vec<(u32, SegmentIdentity)>,
     /// In copy mode: each layer's private copy.
     copies: Option<HashMap<u32, LayerCopy>>,
     current: Option<SceneSnapshot>,
@@ -199,7 +201,7 @@ impl SceneReaderBuilder {
     pub fn open(self) -> Result<SceneReader, ReaderOpenError> {
         Ok(SceneReader {
             subscriber: self.subscriber.open()?,
-            validated: HashMap::new(),
+            validated: Vec::new(),
             copies: self.copy_segments.then(HashMap::new),
             current: None,
             validations: 0,
@@ -291,7 +293,10 @@ impl SceneReader {
         let manifest = validate_manifest(manifest, "manifest").map_err(invalid)?;
         let mut layers = Vec::with_capacity(snap.layer_count());
         let mut chunks = Vec::new();
-        let mut newly = Vec::new();
+        let mut identities = Vec::with_capacity(snap.layer_count());
+        let mut newly = 0;
+        // Both lists ascend by segment id: one walk finds each segment's previous identity.
+        let mut previous = self.validated.iter().peekable();
         for ((entry, _), bytes) in snap.layers().zip(segment_bytes) {
             let identity = (
                 snap.session(),
@@ -299,7 +304,15 @@ impl SceneReader {
                 bytes.as_ptr() as usize,
                 bytes.len(),
             );
-            let known = self.validated.get(&entry.layer_id) == Some(&identity);
+            let known = loop {
+                match previous.peek() {
+                    Some((id, _)) if *id < entry.layer_id => {
+                        previous.next();
+                    }
+                    Some((id, seen)) => break *id == entry.layer_id && *seen == identity,
+                    None => break false,
+                }
+            };
             let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
             if is_chunk_segment_id(entry.layer_id) {
                 chunks.push(if known {
@@ -326,9 +339,8 @@ impl SceneReader {
                     validate_layer(bytes, &what()).map_err(invalid)?
                 });
             }
-            if !known {
-                newly.push((entry.layer_id, identity));
-            }
+            newly += usize::from(!known);
+            identities.push((entry.layer_id, identity));
         }
         ArchivedScene::new(manifest, layers, chunks).map_err(|reason| {
             invalid(SnapshotError::Inconsistent {
@@ -336,8 +348,8 @@ impl SceneReader {
                 reason,
             })
         })?;
-        self.validations += newly.len() as u64;
-        self.validated.extend(newly);
+        self.validations += newly as u64;
+        self.validated = identities;
         self.current = Some(accepted.clone());
         Ok(Some(accepted))
     }

@@ -119,20 +119,38 @@ fn check_offsets(name: &str, offsets: &[u32], rows: usize, len: usize) -> Result
             offsets.len()
         ));
     }
-    if !offsets.is_sorted() {
+    if !ascending(offsets, false) {
         return Err(format!("{name}: offsets decrease"));
     }
     Ok(())
 }
 
-fn check_below(name: &str, values: &[u32], bound: usize) -> Result<(), String> {
-    match values.iter().position(|&v| v as usize >= bound) {
-        Some(i) => Err(format!(
-            "{name}[{i}] = {} is out of range (< {bound})",
-            values[i]
-        )),
-        None => Ok(()),
+/// Whether `values` ascend (strictly if `strict`), in one branch-free pass that
+/// vectorises (`is_sorted` stops at the first pair, so it does not).
+fn ascending<T: PartialOrd + Copy>(values: &[T], strict: bool) -> bool {
+    let pairs = values.iter().zip(values.get(1..).unwrap_or(&[]));
+    if strict {
+        pairs.fold(true, |ok, (a, b)| ok & (a < b))
+    } else {
+        pairs.fold(true, |ok, (a, b)| ok & (a <= b))
     }
+}
+
+/// Checks that every value is below `bound`. The scan is branch-free (a maximum, which
+/// vectorises): it runs over every column of every new segment a reader receives.
+fn check_below(name: &str, values: &[u32], bound: usize) -> Result<(), String> {
+    let max = values.iter().fold(0, |m, &v| m.max(v));
+    if values.is_empty() || (max as usize) < bound {
+        return Ok(());
+    }
+    let i = values
+        .iter()
+        .position(|&v| v as usize >= bound)
+        .unwrap_or(0);
+    Err(format!(
+        "{name}[{i}] = {} is out of range (< {bound})",
+        values[i]
+    ))
 }
 
 /// The consistency pass run once per validated layer segment: everything an accessor
@@ -144,7 +162,7 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
     if rows > u32::MAX as usize {
         return Err("too many rows".into());
     }
-    if !ids.windows(2).all(|w| w[0] < w[1]) {
+    if !ascending(ids, true) {
         return Err("node ids are not strictly ascending".into());
     }
     if ids.last() == Some(&u64::MAX) {
@@ -217,16 +235,16 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
         }
     }
     let aabb_rows = u32s(&l.aabb_rows);
-    if aabb_rows.len() != l.aabbs.len() || !aabb_rows.windows(2).all(|w| w[0] < w[1]) {
+    if aabb_rows.len() != l.aabbs.len() || !ascending(aabb_rows, true) {
         return Err("aabb rows not strictly ascending or differ in length from boxes".into());
     }
     check_below("aabb_rows", aabb_rows, rows)?;
-    for (name, index, postings) in [
-        ("label", &l.label_index, &l.label_postings),
-        ("key", &l.key_index, &l.key_postings),
+    for (name, postings_name, index, postings) in [
+        ("label", "label_postings", &l.label_index, &l.label_postings),
+        ("key", "key_postings", &l.key_index, &l.key_postings),
     ] {
         let postings = u32s(postings);
-        check_below(&format!("{name}_postings"), postings, rows)?;
+        check_below(postings_name, postings, rows)?;
         for (term, range) in index.iter() {
             let [s, e] = [range[0].to_native() as usize, range[1].to_native() as usize];
             if s > e || e > postings.len() {
@@ -278,25 +296,84 @@ fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), St
     Ok(())
 }
 
-/// Where layer `id` is in `manifest`, whose layers are ascending by id (the caller checked
-/// it): a binary search, so that checking a cut costs O(edges · log layers) and a scene of
-/// hundreds of layers is not checked in O(layers²) per snapshot.
-pub(super) fn layer_position(manifest: &ArchivedManifest, id: u32) -> Option<usize> {
-    manifest
-        .layers
-        .binary_search_by_key(&id, |m| m.id.to_native())
-        .ok()
+/// Where each layer of a manifest (ascending by id, as the caller checked) is, by id: a
+/// table indexed by `id - first id` when the ids are dense enough (at most
+/// [`DENSE_SPAN_PER_LAYER`] ids per layer), else a binary search. Checking a cut looks up
+/// every DAG edge and graph-index entry, so a scene of hundreds of layers is checked in
+/// O(edges) per snapshot, not O(layers²).
+pub(super) struct LayerPositions<'a> {
+    manifest: &'a ArchivedManifest,
+    first: u32,
+    /// Position of id `first + k` at `k`, `u32::MAX` for none; empty when ids are sparse.
+    dense: Vec<u32>,
+}
+
+/// Largest id span per layer for which [`LayerPositions`] builds its table (a few bytes
+/// per id).
+const DENSE_SPAN_PER_LAYER: usize = 16;
+
+impl<'a> LayerPositions<'a> {
+    /// The positions of `manifest`'s layers, whose ids are ascending.
+    pub(super) fn new(manifest: &'a ArchivedManifest) -> Self {
+        let layers = &manifest.layers;
+        let (first, dense) = match (layers.first(), layers.last()) {
+            (Some(a), Some(b)) => {
+                let (first, last) = (a.id.to_native(), b.id.to_native());
+                let span = last.saturating_sub(first) as usize + 1;
+                let dense = if span <= DENSE_SPAN_PER_LAYER * layers.len() {
+                    let mut dense = vec![u32::MAX; span];
+                    for (i, m) in layers.iter().enumerate() {
+                        if let Some(slot) =
+                            dense.get_mut(m.id.to_native().wrapping_sub(first) as usize)
+                        {
+                            *slot = i as u32;
+                        }
+                    }
+                    dense
+                } else {
+                    Vec::new()
+                };
+                (first, dense)
+            }
+            _ => (0, Vec::new()),
+        };
+        LayerPositions {
+            manifest,
+            first,
+            dense,
+        }
+    }
+
+    /// Where layer `id` is in the manifest.
+    pub(super) fn get(&self, id: u32) -> Option<usize> {
+        if self.dense.is_empty() {
+            return self
+                .manifest
+                .layers
+                .binary_search_by_key(&id, |m| m.id.to_native())
+                .ok();
+        }
+        let at = *self.dense.get(id.wrapping_sub(self.first) as usize)?;
+        (at != u32::MAX).then_some(at as usize)
+    }
 }
 
 /// Checks the manifest's layer DAG: unique names, mirrored edges, no cycle. Edges are
 /// known to name listed layers, and layers are known to be ascending by id.
-pub(super) fn check_dag(manifest: &ArchivedManifest) -> Result<(), String> {
-    let mut names: Vec<&str> = manifest.layers.iter().map(|m| m.name.as_str()).collect();
-    names.sort_unstable();
-    if names.windows(2).any(|w| w[0] == w[1]) {
+pub(super) fn check_dag(
+    manifest: &ArchivedManifest,
+    positions: &LayerPositions<'_>,
+) -> Result<(), String> {
+    let mut names =
+        rustc_hash::FxHashSet::with_capacity_and_hasher(manifest.layers.len(), Default::default());
+    if !manifest
+        .layers
+        .iter()
+        .all(|m| names.insert(m.name.as_str()))
+    {
         return Err("two layers share a name".into());
     }
-    let position = |id: u32| layer_position(manifest, id);
+    let position = |id: u32| positions.get(id);
     for m in manifest.layers.iter() {
         for &c in u32s(&m.children) {
             let child = &manifest.layers[position(c).ok_or("unknown DAG child")?];

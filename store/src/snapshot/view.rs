@@ -4,7 +4,7 @@ use super::chunk::{check_chunk_matches, chunk_points};
 use super::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, NO_PARENT, u32s, u64s,
 };
-use super::validate::{check_dag, layer_position};
+use super::validate::{LayerPositions, check_dag};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
 use crate::points::PointColumn;
@@ -71,18 +71,17 @@ impl<'a> ArchivedScene<'a> {
                 return Err("manifest layers are not ascending".into());
             }
         }
-        // Ascending (checked above): each id is found by binary search.
+        // Ascending (checked above): each id is found in a table or by binary search.
+        let positions = LayerPositions::new(manifest);
         let known = |ids: &ArchivedVec<rkyv::rend::u32_le>| {
-            u32s(ids)
-                .iter()
-                .all(|&id| layer_position(manifest, id).is_some())
+            u32s(ids).iter().all(|&id| positions.get(id).is_some())
         };
         for m in manifest.layers.iter() {
             if !known(&m.parents) || !known(&m.children) {
                 return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
             }
         }
-        check_dag(manifest)?;
+        check_dag(manifest, &positions)?;
         for ls in manifest
             .label_layers
             .values()
