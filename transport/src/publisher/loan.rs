@@ -58,6 +58,11 @@ pub struct ChunkPages {
     written: HashMap<usize, usize>,
     /// The sum of `written`.
     resident: usize,
+    /// Per chunk of the current pool, the bytes from its payload start whose tmpfs pages are
+    /// known to exist (written by this publisher and not released since): a segment that fits
+    /// in them needs no new shared memory. Cleared whenever the loans grow, since iceoryx2 may
+    /// then map a new pool whose chunks reuse old addresses.
+    backed: HashMap<usize, usize>,
     /// Bytes of the newest segment of each id, and their sum.
     newest: HashMap<u32, usize>,
     newest_total: usize,
@@ -75,6 +80,7 @@ impl ChunkPages {
             loan_blocks: initial_blocks.max(1),
             written: HashMap::new(),
             resident: 0,
+            backed: HashMap::new(),
             newest: HashMap::new(),
             newest_total: 0,
             floor: RESIDENT_FLOOR,
@@ -91,8 +97,23 @@ impl ChunkPages {
 
     /// The slice length to loan for a segment of `blocks` blocks: the largest loaned so far.
     pub fn loan_blocks(&mut self, blocks: usize) -> usize {
-        self.loan_blocks = self.loan_blocks.max(blocks);
+        if blocks > self.loan_blocks {
+            self.loan_blocks = blocks;
+            self.backed.clear();
+        }
         self.loan_blocks
+    }
+
+    /// Whether a segment of `blocks` blocks is loaned from the current pool (no larger loan,
+    /// so iceoryx2 maps no new pool for it).
+    pub fn fits_current_pool(&self, blocks: usize) -> bool {
+        blocks <= self.loan_blocks
+    }
+
+    /// Bytes from the start of the chunk whose payload starts at address `payload` whose
+    /// pages are known to exist in the current pool (0 for a chunk not written since).
+    pub fn backed(&self, payload: usize) -> usize {
+        self.backed.get(&payload).copied().unwrap_or(0)
     }
 
     /// Records that the chunk whose loaned payload starts at address `payload` (`total` bytes
@@ -123,6 +144,13 @@ impl ChunkPages {
             (dirty.max(len), None)
         };
         self.written.insert(payload, written);
+        // What was known to be backed in this pool, plus what was just written; a release
+        // leaves the pages up to `start`.
+        let backed = match release {
+            Some((start, _)) => start - payload,
+            None => self.backed(payload).max(len),
+        };
+        self.backed.insert(payload, backed);
         self.resident = self.resident + written - old_written;
         release
     }
@@ -270,6 +298,28 @@ mod tests {
             Some((total + page, 7 * page))
         );
         assert_eq!(pages.resident, 9 * page);
+    }
+
+    #[test]
+    fn knows_which_pages_a_chunk_holds_until_the_pool_may_change() {
+        let mut pages = always_releasing();
+        let page = pages.page;
+        let total = 16 * page;
+        assert_eq!(pages.backed(0), 0);
+        pages.stale_range(0, total, 1, 5 * page + 1);
+        assert_eq!(pages.backed(0), 5 * page + 1);
+        // Smaller: the pages past the page it ends in are released.
+        pages.stale_range(0, total, 1, page + 1);
+        assert_eq!(pages.backed(0), 2 * page);
+        // A larger loan may map a new pool at the same addresses: nothing is known.
+        assert!(pages.fits_current_pool(4));
+        assert!(!pages.fits_current_pool(5));
+        pages.loan_blocks(5);
+        assert_eq!(pages.backed(0), 0);
+        // The chunk's earlier bytes are not taken as backed in the new pool.
+        pages.floor = usize::MAX;
+        pages.stale_range(0, total, 1, page);
+        assert_eq!(pages.backed(0), page);
     }
 
     #[test]

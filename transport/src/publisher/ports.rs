@@ -43,6 +43,11 @@ pub(crate) struct SegmentService {
 }
 
 /// Loans, fills and sends one segment after checking shared-memory space.
+///
+/// The space check (a `statvfs`) runs before the loan when the loan grows the pool, and after
+/// it otherwise, only for the part of the segment beyond the pages the loaned chunk is known to
+/// hold already ([`loan::ChunkPages::backed`]): republishing a segment into a reused chunk
+/// needs no new pages and costs no system call. A refused sample goes back to the pool unsent.
 pub(crate) fn send_segment<E>(
     service: &mut SegmentService,
     shm_dir: &Path,
@@ -57,7 +62,10 @@ where
     let payload_bytes = blocks
         .checked_mul(BLOCK_SIZE)
         .ok_or(PublishError::TooLarge { len })?;
-    shm::ensure_free(shm_dir, payload_bytes as u64)?;
+    let in_current_pool = service.pages.fits_current_pool(blocks);
+    if !in_current_pool {
+        shm::ensure_free(shm_dir, payload_bytes as u64)?;
+    }
     let mut sample = service
         .publisher
         .loan_slice_uninit(service.pages.loan_blocks(blocks))
@@ -65,6 +73,13 @@ where
             service: service.name.clone(),
             source,
         })?;
+    if in_current_pool {
+        let payload = sample.payload_mut().as_mut_ptr().addr();
+        let new_bytes = payload_bytes.saturating_sub(service.pages.backed(payload));
+        if new_bytes > 0 {
+            shm::ensure_free(shm_dir, new_bytes as u64)?;
+        }
+    }
     *sample.user_header_mut() = header;
     let sample = loan::fill_sample(sample, len, &mut service.pages, fill)
         .map_err(|e| PublishError::Fill(e.into()))?;
