@@ -111,9 +111,15 @@ impl ChunkPages {
     }
 
     /// Bytes from the start of the chunk whose payload starts at address `payload` whose
-    /// pages are known to exist in the current pool (0 for a chunk not written since).
+    /// pages are known to exist in the current pool (0 for a chunk not written since): the
+    /// bytes written there, up to the end of the page the last of them is in.
     pub fn backed(&self, payload: usize) -> usize {
-        self.backed.get(&payload).copied().unwrap_or(0)
+        match self.backed.get(&payload) {
+            Some(&written) if written > 0 => {
+                (payload + written).next_multiple_of(self.page) - payload
+            }
+            _ => 0,
+        }
     }
 
     /// Records that the chunk whose loaned payload starts at address `payload` (`total` bytes
@@ -148,7 +154,7 @@ impl ChunkPages {
         // leaves the pages up to `start`.
         let backed = match release {
             Some((start, _)) => start - payload,
-            None => self.backed(payload).max(len),
+            None => self.backed.get(&payload).copied().unwrap_or(0).max(len),
         };
         self.backed.insert(payload, backed);
         self.resident = self.resident + written - old_written;
@@ -307,7 +313,8 @@ mod tests {
         let total = 16 * page;
         assert_eq!(pages.backed(0), 0);
         pages.stale_range(0, total, 1, 5 * page + 1);
-        assert_eq!(pages.backed(0), 5 * page + 1);
+        // The page holding the last byte is whole.
+        assert_eq!(pages.backed(0), 6 * page);
         // Smaller: the pages past the page it ends in are released.
         pages.stale_range(0, total, 1, page + 1);
         assert_eq!(pages.backed(0), 2 * page);
