@@ -142,8 +142,8 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
 
     /// The writer's incremental segments hold the same rows, indexes and postings as
-    /// fresh ones, and its cached manifest equals a fresh one, whatever the mutations
-    /// between two publishes.
+    /// fresh ones, and its cached manifest (and the archived length it keeps) equals a
+    /// fresh one, whatever the mutations between two publishes.
     #[test]
     fn cached_layer_segments_equal_fresh_ones(
         seed in 0u8..20,
@@ -160,8 +160,11 @@ proptest! {
                     let cached = segment_fingerprint(cache.layer_segment(&mut g, l));
                     prop_assert_eq!(cached, fresh, "layer {} after op {} ({:?})", l, i, op);
                 }
-                let fresh = manifest_fingerprint(&g.manifest(i as u64));
-                prop_assert_eq!(manifest_fingerprint(cache.manifest(&g, i as u64)), fresh);
+                let fresh = g.manifest(i as u64);
+                let (cached, len) = cache.manifest_with_len(&g, i as u64);
+                prop_assert_eq!(manifest_fingerprint(cached), manifest_fingerprint(&fresh));
+                // The kept archived length is the one a fresh manifest archives to.
+                prop_assert_eq!(len, fresh.archived_len());
             }
         }
     }

@@ -285,8 +285,7 @@ impl SceneWriter {
         }
         self.published_segments = live;
         let generation = self.generation + 1;
-        let manifest = self.segments.manifest(&self.graph, generation);
-        let len = manifest.archived_len();
+        let (manifest, len) = self.segments.manifest_with_len(&self.graph, generation);
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {
                 manifest.archive_into(buf).map(|_| ())

@@ -56,8 +56,9 @@ pub struct SegmentCache {
     layers: FxHashMap<LayerId, Box<Cached>>,
     /// Points per chunk of a chunked layer ([`SegmentCache::published_layer`]).
     point_chunk_len: usize,
-    /// The last manifest and the graph's structure and terms generations it was built at.
-    manifest: Option<(u64, u64, Manifest)>,
+    /// The last manifest, the graph's structure and terms generations it was built at, and
+    /// its archived length once asked for ([`SegmentCache::manifest_with_len`]).
+    manifest: Option<CachedManifest>,
 }
 
 impl std::fmt::Debug for SegmentCache {
@@ -67,6 +68,16 @@ impl std::fmt::Debug for SegmentCache {
             .field("manifest", &self.manifest.is_some())
             .finish()
     }
+}
+
+/// The last manifest with what it was built from.
+struct CachedManifest {
+    structure_generation: u64,
+    terms_generation: u64,
+    manifest: Manifest,
+    /// The manifest's archived length: it changes only with the structure or the terms
+    /// (every other field has a fixed archived size), so it is kept across generations.
+    archived_len: Option<usize>,
 }
 
 /// One layer's cached segment.
@@ -182,10 +193,26 @@ impl SegmentCache {
     /// per-layer generations, node counts and id bounds are brought up to date (the id
     /// bounds from this cache's segments where they are current).
     pub fn manifest(&mut self, graph: &SceneGraph, generation: u64) -> &Manifest {
+        &self.update_manifest(graph, generation).manifest
+    }
+
+    /// [`SegmentCache::manifest`] with its archived length ([`Manifest::archived_len`]),
+    /// which is sized only when the structure or the terms changed: a publish archives the
+    /// manifest once, not twice.
+    pub fn manifest_with_len(&mut self, graph: &SceneGraph, generation: u64) -> (&Manifest, usize) {
+        let cached = self.update_manifest(graph, generation);
+        let len = *cached
+            .archived_len
+            .get_or_insert_with(|| cached.manifest.archived_len());
+        (&cached.manifest, len)
+    }
+
+    fn update_manifest(&mut self, graph: &SceneGraph, generation: u64) -> &mut CachedManifest {
         let key = (graph.structure_generation, graph.terms_generation);
         self.layers.retain(|id, _| graph.layers.contains_key(id));
-        let manifest = match self.manifest.take() {
-            Some((s, t, mut m)) if (s, t) == key => {
+        let cached = match self.manifest.take() {
+            Some(mut c) if (c.structure_generation, c.terms_generation) == key => {
+                let m = &mut c.manifest;
                 for (entry, (id, l)) in m.layers.iter_mut().zip(&graph.layers) {
                     entry.generation = l.generation;
                     entry.node_count = l.nodes.len() as u64;
@@ -203,11 +230,16 @@ impl SegmentCache {
                     };
                 }
                 m.generation = generation;
-                m
+                c
             }
-            _ => graph.manifest(generation),
+            _ => CachedManifest {
+                structure_generation: key.0,
+                terms_generation: key.1,
+                manifest: graph.manifest(generation),
+                archived_len: None,
+            },
         };
-        &self.manifest.insert((key.0, key.1, manifest)).2
+        self.manifest.insert(cached)
     }
 }
 
