@@ -371,14 +371,17 @@ impl SlamReplay {
                 description: "odometry",
             })?;
         }
-        if let Some(places) = self.places.as_mut() {
-            if let Some(place) = places.nearest(s.graph, &self.position) {
-                // Nesting needs a places -> agents layer edge; scenes without one skip it.
-                let _ = s.apply(Edit::Nest {
-                    parent: place,
-                    child: id,
-                });
-            }
+        let position = self.position;
+        if let Some(place) = self
+            .places
+            .as_mut()
+            .and_then(|places| places.nearest(s.graph, &position))
+        {
+            // Nesting needs a places -> agents layer edge; scenes without one skip it.
+            let _ = s.apply(Edit::Nest {
+                parent: place,
+                child: id,
+            });
         }
         self.last_pose = Some(id);
         Ok(())
