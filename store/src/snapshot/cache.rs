@@ -397,6 +397,9 @@ const MAX_SPLICED: usize = 32;
 /// rebuilt (labels or keys changed), or `None`, changing no row, when more than
 /// [`MAX_SPLICED`] rows change length. `ids` are the new sorted ids; `points_kept`, per
 /// dirty row, how many of its leading points are unchanged.
+///
+/// The new content of every dirty row is first built into one scratch segment (row `k`
+/// of it is `dirty_rows[k]`), so a build allocates its columns once, not per row.
 fn rows_in_place(
     graph: &SceneGraph,
     seg: &mut LayerSegment,
@@ -405,83 +408,116 @@ fn rows_in_place(
     points_kept: &[usize],
     ids: &[u64],
 ) -> Option<bool> {
-    let mut fresh = Vec::with_capacity(dirty_rows.len());
-    let mut reshaped = 0;
+    let mut fresh = LayerSegment::empty(LayerId(seg.layer), 0, "", dirty_rows.len());
+    // New strings go to the segment's own table.
+    fresh.strings = std::mem::take(&mut seg.strings);
     for &row in dirty_rows {
-        let mut one = LayerSegment::empty(LayerId(seg.layer), 0, "", 1);
-        // New strings go to the segment's own table.
-        one.strings = std::mem::take(&mut seg.strings);
         let node = &graph.nodes[&NodeId(ids[row])];
         // The points go from the node to the column directly (a mesh node may hold many).
-        graph.push_row_except_points(&mut one, table, node, row as u32, ids);
-        one.point_offsets.push(node.points.len() as u32);
-        seg.strings = std::mem::take(&mut one.strings);
-        let same_shape = [
-            (&seg.point_offsets, &one.point_offsets),
-            (&seg.child_offsets, &one.child_offsets),
-            (&seg.out_offsets, &one.out_offsets),
-            (&seg.in_offsets, &one.in_offsets),
-            (&seg.label_offsets, &one.label_offsets),
-            (&seg.feature_offsets, &one.feature_offsets),
-        ]
+        graph.push_row_except_points(&mut fresh, table, node, row as u32, ids);
+        let end = fresh.point_offsets.last().copied().unwrap_or(0) + node.points.len() as u32;
+        fresh.point_offsets.push(end);
+    }
+    seg.strings = std::mem::take(&mut fresh.strings);
+    let len_of = |offsets: &[u32], i: usize| offsets[i + 1] - offsets[i];
+    let reshaped = dirty_rows
         .iter()
-        .all(|(old, new)| old[row + 1] - old[row] == new[1]);
-        if !same_shape {
-            reshaped += 1;
-            if reshaped > MAX_SPLICED {
-                return None;
-            }
-        }
-        fresh.push(one);
+        .enumerate()
+        .filter(|&(k, &row)| {
+            [
+                (&seg.point_offsets, &fresh.point_offsets),
+                (&seg.child_offsets, &fresh.child_offsets),
+                (&seg.out_offsets, &fresh.out_offsets),
+                (&seg.in_offsets, &fresh.in_offsets),
+                (&seg.label_offsets, &fresh.label_offsets),
+                (&seg.feature_offsets, &fresh.feature_offsets),
+            ]
+            .iter()
+            .any(|(old, new)| len_of(old, row) != len_of(new, k))
+        })
+        .count();
+    if reshaped > MAX_SPLICED {
+        return None;
     }
     let mut terms_changed = false;
-    for ((&row, one), &kept) in dirty_rows.iter().zip(&fresh).zip(points_kept) {
+    for (k, (&row, &kept)) in dirty_rows.iter().zip(points_kept).enumerate() {
         let points = &graph.nodes[&NodeId(ids[row])].points;
-        let at = |offsets: &[u32]| offsets[row] as usize..offsets[row + 1] as usize;
-        let r = at(&seg.label_offsets);
-        terms_changed |= seg.labels[r.clone()] != one.labels[..];
-        splice(&mut seg.labels, r.clone(), &one.labels);
-        shift_offsets(&mut seg.label_offsets, row, r.len(), one.labels.len());
-        let r = at(&seg.feature_offsets);
-        terms_changed |= seg.feature_keys[r.clone()] != one.feature_keys[..];
-        splice(&mut seg.feature_keys, r.clone(), &one.feature_keys);
-        splice(&mut seg.feature_kinds, r.clone(), &one.feature_kinds);
-        splice(&mut seg.feature_bits, r.clone(), &one.feature_bits);
-        shift_offsets(
-            &mut seg.feature_offsets,
-            row,
-            r.len(),
-            one.feature_keys.len(),
+        let at = |offsets: &[u32], i: usize| offsets[i] as usize..offsets[i + 1] as usize;
+        let new = at(&fresh.label_offsets, k);
+        let r = at(&seg.label_offsets, row);
+        terms_changed |= seg.labels[r.clone()] != fresh.labels[new.clone()];
+        splice(&mut seg.labels, r.clone(), &fresh.labels[new.clone()]);
+        shift_offsets(&mut seg.label_offsets, row, r.len(), new.len());
+        let new = at(&fresh.feature_offsets, k);
+        let r = at(&seg.feature_offsets, row);
+        terms_changed |= seg.feature_keys[r.clone()] != fresh.feature_keys[new.clone()];
+        splice(
+            &mut seg.feature_keys,
+            r.clone(),
+            &fresh.feature_keys[new.clone()],
         );
+        splice(
+            &mut seg.feature_kinds,
+            r.clone(),
+            &fresh.feature_kinds[new.clone()],
+        );
+        splice(
+            &mut seg.feature_bits,
+            r.clone(),
+            &fresh.feature_bits[new.clone()],
+        );
+        shift_offsets(&mut seg.feature_offsets, row, r.len(), new.len());
         // The leading points that stayed as they were are not rewritten (a mesh node
         // growing at its end).
-        let r = at(&seg.point_offsets);
+        let r = at(&seg.point_offsets, row);
         splice(&mut seg.points, r.start + kept..r.end, &points[kept..]);
         shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
-        let r = at(&seg.child_offsets);
-        splice(&mut seg.children, r.clone(), &one.children);
-        shift_offsets(&mut seg.child_offsets, row, r.len(), one.children.len());
-        let r = at(&seg.out_offsets);
-        splice(&mut seg.out_targets, r.clone(), &one.out_targets);
-        splice(&mut seg.out_descriptions, r.clone(), &one.out_descriptions);
-        shift_offsets(&mut seg.out_offsets, row, r.len(), one.out_targets.len());
-        let r = at(&seg.in_offsets);
-        splice(&mut seg.in_sources, r.clone(), &one.in_sources);
-        splice(&mut seg.in_descriptions, r.clone(), &one.in_descriptions);
-        shift_offsets(&mut seg.in_offsets, row, r.len(), one.in_sources.len());
-        seg.parents[row] = one.parents[0];
-        match (
-            seg.aabb_rows.binary_search(&(row as u32)),
-            one.aabbs.first(),
-        ) {
-            (Ok(i), Some(b)) => seg.aabbs[i] = *b,
+        let new = at(&fresh.child_offsets, k);
+        let r = at(&seg.child_offsets, row);
+        splice(&mut seg.children, r.clone(), &fresh.children[new.clone()]);
+        shift_offsets(&mut seg.child_offsets, row, r.len(), new.len());
+        let new = at(&fresh.out_offsets, k);
+        let r = at(&seg.out_offsets, row);
+        splice(
+            &mut seg.out_targets,
+            r.clone(),
+            &fresh.out_targets[new.clone()],
+        );
+        splice(
+            &mut seg.out_descriptions,
+            r.clone(),
+            &fresh.out_descriptions[new.clone()],
+        );
+        shift_offsets(&mut seg.out_offsets, row, r.len(), new.len());
+        let new = at(&fresh.in_offsets, k);
+        let r = at(&seg.in_offsets, row);
+        splice(
+            &mut seg.in_sources,
+            r.clone(),
+            &fresh.in_sources[new.clone()],
+        );
+        splice(
+            &mut seg.in_descriptions,
+            r.clone(),
+            &fresh.in_descriptions[new.clone()],
+        );
+        shift_offsets(&mut seg.in_offsets, row, r.len(), new.len());
+        seg.parents[row] = fresh.parents[k];
+        // The scratch segment's boxes carry their real row numbers, ascending.
+        let new_box = fresh
+            .aabb_rows
+            .binary_search(&(row as u32))
+            .ok()
+            .map(|i| fresh.aabbs[i]);
+        match (seg.aabb_rows.binary_search(&(row as u32)), new_box) {
+            (Ok(i), Some(b)) => seg.aabbs[i] = b,
             (Ok(i), None) => {
                 seg.aabb_rows.remove(i);
                 seg.aabbs.remove(i);
             }
             (Err(i), Some(b)) => {
                 seg.aabb_rows.insert(i, row as u32);
-                seg.aabbs.insert(i, *b);
+                seg.aabbs.insert(i, b);
             }
             (Err(_), None) => {}
         }

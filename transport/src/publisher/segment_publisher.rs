@@ -99,8 +99,8 @@ impl PublisherBuilder {
         self
     }
 
-    /// The shared-memory file system whose free space is checked before each publish
-    /// (default `/dev/shm`).
+    /// The shared-memory file system whose free space is checked before a publish writes
+    /// pages the pool does not hold yet (default `/dev/shm`).
     pub fn shm_dir(mut self, path: impl Into<PathBuf>) -> Self {
         self.shm_dir = path.into();
         self

@@ -2,7 +2,8 @@
 //!
 //! iceoryx2 sizes data segments with `ftruncate`, which on tmpfs reserves nothing: pages are
 //! allocated when first written. Writing into a segment whose pages tmpfs cannot provide raises
-//! SIGBUS, so the writer checks the free space before it loans a sample.
+//! SIGBUS, so the writer checks the free space before it writes pages that a loaned chunk does
+//! not hold yet (`ports::send_segment`: a segment republished into a reused chunk needs none).
 
 use std::path::Path;
 
