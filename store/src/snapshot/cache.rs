@@ -419,7 +419,6 @@ fn rows_in_place(
         fresh.point_offsets.push(end);
     }
     seg.strings = std::mem::take(&mut fresh.strings);
-    let len_of = |offsets: &[u32], i: usize| offsets[i + 1] - offsets[i];
     let reshaped = dirty_rows
         .iter()
         .enumerate()
@@ -433,7 +432,7 @@ fn rows_in_place(
                 (&seg.feature_offsets, &fresh.feature_offsets),
             ]
             .iter()
-            .any(|(old, new)| len_of(old, row) != len_of(new, k))
+            .any(|(old, new)| row_range(old, row).len() != row_range(new, k).len())
         })
         .count();
     if reshaped > MAX_SPLICED {
@@ -442,14 +441,13 @@ fn rows_in_place(
     let mut terms_changed = false;
     for (k, (&row, &kept)) in dirty_rows.iter().zip(points_kept).enumerate() {
         let points = &graph.nodes[&NodeId(ids[row])].points;
-        let at = |offsets: &[u32], i: usize| offsets[i] as usize..offsets[i + 1] as usize;
-        let new = at(&fresh.label_offsets, k);
-        let r = at(&seg.label_offsets, row);
+        let new = row_range(&fresh.label_offsets, k);
+        let r = row_range(&seg.label_offsets, row);
         terms_changed |= seg.labels[r.clone()] != fresh.labels[new.clone()];
         splice(&mut seg.labels, r.clone(), &fresh.labels[new.clone()]);
         shift_offsets(&mut seg.label_offsets, row, r.len(), new.len());
-        let new = at(&fresh.feature_offsets, k);
-        let r = at(&seg.feature_offsets, row);
+        let new = row_range(&fresh.feature_offsets, k);
+        let r = row_range(&seg.feature_offsets, row);
         terms_changed |= seg.feature_keys[r.clone()] != fresh.feature_keys[new.clone()];
         splice(
             &mut seg.feature_keys,
@@ -469,15 +467,15 @@ fn rows_in_place(
         shift_offsets(&mut seg.feature_offsets, row, r.len(), new.len());
         // The leading points that stayed as they were are not rewritten (a mesh node
         // growing at its end).
-        let r = at(&seg.point_offsets, row);
+        let r = row_range(&seg.point_offsets, row);
         splice(&mut seg.points, r.start + kept..r.end, &points[kept..]);
         shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
-        let new = at(&fresh.child_offsets, k);
-        let r = at(&seg.child_offsets, row);
+        let new = row_range(&fresh.child_offsets, k);
+        let r = row_range(&seg.child_offsets, row);
         splice(&mut seg.children, r.clone(), &fresh.children[new.clone()]);
         shift_offsets(&mut seg.child_offsets, row, r.len(), new.len());
-        let new = at(&fresh.out_offsets, k);
-        let r = at(&seg.out_offsets, row);
+        let new = row_range(&fresh.out_offsets, k);
+        let r = row_range(&seg.out_offsets, row);
         splice(
             &mut seg.out_targets,
             r.clone(),
@@ -489,8 +487,8 @@ fn rows_in_place(
             &fresh.out_descriptions[new.clone()],
         );
         shift_offsets(&mut seg.out_offsets, row, r.len(), new.len());
-        let new = at(&fresh.in_offsets, k);
-        let r = at(&seg.in_offsets, row);
+        let new = row_range(&fresh.in_offsets, k);
+        let r = row_range(&seg.in_offsets, row);
         splice(
             &mut seg.in_sources,
             r.clone(),
@@ -523,6 +521,11 @@ fn rows_in_place(
         }
     }
     Some(terms_changed)
+}
+
+/// The entries of row `row` of a CSR column with `offsets`.
+fn row_range(offsets: &[u32], row: usize) -> Range<usize> {
+    offsets[row] as usize..offsets[row + 1] as usize
 }
 
 /// Replaces `values[range]` by `new`: the common prefix is overwritten, and the rest
