@@ -24,8 +24,9 @@ use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, chunk_unchecked, is_chunk_segment_id, layer_unchecked,
-    manifest_unchecked, validate_chunk, validate_layer, validate_manifest,
+    ArchivedScene, SegmentBytes, chunk_unchecked, is_chunk_segment_id, is_tree_chunk_segment_id,
+    layer_unchecked, manifest_unchecked, tree_chunk_unchecked, validate_chunk, validate_layer,
+    validate_manifest, validate_tree_chunk,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -81,13 +82,20 @@ impl SceneSnapshot {
         }
     }
 
-    /// How many of the snapshot's segments are layers: the rest, sorted after them by
-    /// segment id, are point chunks.
-    fn layer_count(&self) -> usize {
-        self.inner
-            .layers()
-            .take_while(|(entry, _)| !is_chunk_segment_id(entry.layer_id))
-            .count()
+    /// How many of the snapshot's segments are layers and how many point chunks: the
+    /// rest, sorted after them by segment id, are tree chunks.
+    fn segment_counts(&self) -> (usize, usize) {
+        let (mut layers, mut points) = (0, 0);
+        for (entry, _) in self.inner.layers() {
+            if is_tree_chunk_segment_id(entry.layer_id) {
+                break;
+            } else if is_chunk_segment_id(entry.layer_id) {
+                points += 1;
+            } else {
+                layers += 1;
+            }
+        }
+        (layers, points)
     }
 }
 
@@ -102,7 +110,9 @@ impl SceneSnapshot {
         // SAFETY: see above; in copy mode the bytes are the private copies that were
         // validated, which nothing but this reader can reach.
         let manifest = unsafe { manifest_unchecked(manifest) };
-        let (layers, chunks) = segments.split_at(self.layer_count());
+        let (layer_count, point_count) = self.segment_counts();
+        let (layers, chunks) = segments.split_at(layer_count);
+        let (chunks, trees) = chunks.split_at(point_count);
         let layers = layers
             .iter()
             // SAFETY: as above, each layer's bytes were validated before `accept` returned.
@@ -110,11 +120,16 @@ impl SceneSnapshot {
             .collect();
         let chunks = chunks
             .iter()
-            // SAFETY: as above, each chunk's bytes passed `validate_chunk`.
+            // SAFETY: as above, each point chunk's bytes passed `validate_chunk`.
             .map(|bytes| unsafe { chunk_unchecked(bytes) })
             .collect();
+        let trees = trees
+            .iter()
+            // SAFETY: as above, each tree chunk's bytes passed `validate_tree_chunk`.
+            .map(|bytes| unsafe { tree_chunk_unchecked(bytes) })
+            .collect();
         // `accept` ran `ArchivedScene::new` on this cut.
-        ArchivedScene::new_prechecked(manifest, layers, chunks)
+        ArchivedScene::new_prechecked(manifest, layers, chunks, trees)
     }
 
     /// The snapshot generation.
@@ -293,6 +308,7 @@ impl SceneReader {
         let manifest = validate_manifest(manifest, "manifest").map_err(invalid)?;
         let mut layers = Vec::with_capacity(snap.layer_count());
         let mut chunks = Vec::new();
+        let mut trees = Vec::new();
         let mut identities = Vec::with_capacity(snap.layer_count());
         let mut newly = 0;
         // Both lists ascend by segment id: one walk finds each segment's previous identity.
@@ -314,7 +330,22 @@ impl SceneReader {
                 }
             };
             let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
-            if is_chunk_segment_id(entry.layer_id) {
+            if is_tree_chunk_segment_id(entry.layer_id) {
+                trees.push(if known {
+                    // SAFETY: these exact bytes (same address, length and identity) passed
+                    // `validate_tree_chunk` earlier, and the transport never changes a
+                    // published sample.
+                    unsafe { tree_chunk_unchecked(bytes) }
+                } else {
+                    validate_tree_chunk(bytes, &what()).map_err(invalid)?
+                });
+            } else if !trees.is_empty() {
+                // Entries are sorted by id, so tree chunks come last: the writer broke that.
+                return Err(invalid(SnapshotError::Inconsistent {
+                    what: what(),
+                    reason: "a layer or point chunk listed after tree chunks".into(),
+                }));
+            } else if is_chunk_segment_id(entry.layer_id) {
                 chunks.push(if known {
                     // SAFETY: these exact bytes (same address, length and identity) passed
                     // `validate_chunk` earlier, and the transport never changes a
@@ -342,7 +373,7 @@ impl SceneReader {
             newly += usize::from(!known);
             identities.push((entry.layer_id, identity));
         }
-        ArchivedScene::new(manifest, layers, chunks).map_err(|reason| {
+        ArchivedScene::new(manifest, layers, chunks, trees).map_err(|reason| {
             invalid(SnapshotError::Inconsistent {
                 what: "snapshot".into(),
                 reason,

@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use ygg_store::snapshot::{
-    SegmentBytes, is_chunk_segment_id, validate_chunk, validate_layer, validate_manifest,
+    SegmentBytes, is_chunk_segment_id, is_tree_chunk_segment_id, validate_chunk, validate_layer,
+    validate_manifest, validate_tree_chunk,
 };
 use ygg_transport::ManifestEntry;
 use ygg_transport::protocol::decode_manifest_prefix;
@@ -65,8 +66,9 @@ impl Assembler {
         Self::default()
     }
 
-    /// Validates a segment (the store's `validate_layer`, or `validate_chunk` for a point
-    /// chunk: what a local reader runs) and keeps it.
+    /// Validates a segment (the store's `validate_layer`, or `validate_chunk` /
+    /// `validate_tree_chunk` for a point or tree chunk: what a local reader runs) and
+    /// keeps it.
     ///
     /// # Errors
     /// Why the bytes are not a valid segment; nothing is kept then.
@@ -81,7 +83,9 @@ impl Assembler {
             return Ok(());
         }
         let what = format!("segment {id} generation {generation}");
-        if is_chunk_segment_id(id) {
+        if is_tree_chunk_segment_id(id) {
+            validate_tree_chunk(&bytes, &what).map_err(|e| e.to_string())?;
+        } else if is_chunk_segment_id(id) {
             validate_chunk(&bytes, &what).map_err(|e| e.to_string())?;
         } else {
             validate_layer(&bytes, &what).map_err(|e| e.to_string())?;

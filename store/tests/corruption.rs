@@ -3,11 +3,13 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use ygg_store::index::KdTree;
 use ygg_store::index::SpatialIndex;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::{
-    ArchivedScene, LayerSegment, Manifest, PointChunk, PointChunkRef, SegmentBytes, archive,
-    validate_chunk, validate_layer, validate_manifest,
+    ArchivedScene, FORMAT_VERSION, LayerSegment, Manifest, PointChunk, PointChunkRef, SegmentBytes,
+    TreeChunk, TreeChunkRef, archive, validate_chunk, validate_layer, validate_manifest,
+    validate_tree_chunk,
 };
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
@@ -188,7 +190,7 @@ fn check_cut(g: &SceneGraph, manifest: &Manifest) -> Result<(), String> {
         .iter()
         .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    ArchivedScene::new(manifest, layers, Vec::new()).map(|_| ())
+    ArchivedScene::new(manifest, layers, Vec::new(), Vec::new()).map(|_| ())
 }
 
 #[test]
@@ -260,7 +262,7 @@ fn check_chunked_cut(
         .iter()
         .map(|b| validate_chunk(b, "chunk").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    let view = ArchivedScene::new(manifest, layers, chunks)?;
+    let view = ArchivedScene::new(manifest, layers, chunks, Vec::new())?;
     let mut points = 0;
     for l in view.layers() {
         for n in view.layer_nodes(l) {
@@ -366,6 +368,146 @@ fn random_corruptions_of_point_chunks_never_panic() {
         }
     }
     // Flips inside coordinates still validate; flips in the structure are refused.
+    assert!(
+        accepted > 100 && refused > 100,
+        "accepted {accepted}, refused {refused}"
+    );
+}
+
+/// The sample scene's segments with the objects layer's index tree moved to a tree chunk
+/// (as a publishing writer sends a large one): the manifest, the layer segments, and the
+/// tree chunks in layer order.
+fn tree_chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<TreeChunk>) {
+    let mut layers = Vec::new();
+    let mut trees = Vec::new();
+    for l in g.layers() {
+        let mut s = g.layer_segment(l);
+        if let Some(index) = s.layer_index.as_mut() {
+            let empty = KdTree::new_from_entries(&[]).unwrap();
+            let r = TreeChunkRef {
+                generation: s.generation,
+                points: index.base_points,
+            };
+            index.tree_chunk = Some(r);
+            trees.push(TreeChunk {
+                version: FORMAT_VERSION,
+                layer: l.0,
+                slot: 0,
+                generation: r.generation,
+                items: index.base_rows,
+                tree: std::mem::replace(&mut index.tree, empty),
+            });
+        }
+        layers.push(s);
+    }
+    (g.manifest(1), layers, trees)
+}
+
+/// Archives and checks a tree-chunked cut as a reader does, then runs every spatial
+/// query on every layer index; the number of points the indexes hold.
+fn check_tree_chunked_cut(
+    cut: &(Manifest, Vec<LayerSegment>, Vec<TreeChunk>),
+    tamper: impl FnOnce(&mut Vec<SegmentBytes>),
+) -> Result<usize, String> {
+    let manifest = archive(&cut.0);
+    let layers: Vec<SegmentBytes> = cut.1.iter().map(archive).collect();
+    let mut trees: Vec<SegmentBytes> = cut.2.iter().map(archive).collect();
+    tamper(&mut trees);
+    let manifest = validate_manifest(&manifest, "manifest").map_err(|e| e.to_string())?;
+    let layers = layers
+        .iter()
+        .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let trees = trees
+        .iter()
+        .map(|b| validate_tree_chunk(b, "tree chunk").map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let view = ArchivedScene::new(manifest, layers, Vec::new(), trees)?;
+    let mut points = 0;
+    for l in view.layers() {
+        if let Some(index) = view.layer_index(l) {
+            points += index.len();
+            let _ = query::nearest_nodes(&view, Scope::Layer(l), [0.5, 0.5, 0.5], 3);
+            let _ = query::nodes_within_radius(&view, Scope::Layer(l), [0.5, 0.5, 0.5], 2.0);
+        }
+    }
+    Ok(points)
+}
+
+#[test]
+fn inconsistent_tree_chunks_are_refused_naming_what_is_wrong() {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    let cut = tree_chunked_cut(&g);
+    assert_eq!(cut.2.len(), 1, "the objects layer's tree is a chunk");
+    let points = check_tree_chunked_cut(&cut, |_| ()).expect("the intact cut is accepted");
+    assert_eq!(points, 30, "the index holds every point of the layer");
+
+    let e = check_tree_chunked_cut(&cut, |t| t.clear()).unwrap_err();
+    assert!(e.contains("names its index's tree chunk, not given"), "{e}");
+    let e = check_tree_chunked_cut(&cut, |t| t.push(t[0].clone())).unwrap_err();
+    assert!(e.contains("1 tree chunks given that no layer names"), "{e}");
+
+    // A tree of another generation (held from an older cut), of another layer, or with
+    // items past the index's base rows.
+    let chunk = |tamper: fn(&mut TreeChunk)| {
+        let mut cut = tree_chunked_cut(&g);
+        tamper(&mut cut.2[0]);
+        check_tree_chunked_cut(&cut, |_| ()).unwrap_err()
+    };
+    let e = chunk(|t| t.generation -= 1);
+    assert!(e.contains("names its index tree at generation"), "{e}");
+    let e = chunk(|t| t.layer += 1);
+    assert!(e.contains("tree chunk segment (layer"), "{e}");
+    let e = chunk(|t| t.items += 1);
+    assert!(e.contains("items below"), "{e}");
+    let e = chunk(|t| t.items = 0);
+    assert!(e.contains("tree chunk"), "{e}");
+
+    // A head that lies about its tree.
+    let mut lying = tree_chunked_cut(&g);
+    let index = lying
+        .1
+        .iter_mut()
+        .find_map(|s| s.layer_index.as_mut())
+        .unwrap();
+    index.tree_chunk.as_mut().unwrap().points += 1;
+    let e = check_tree_chunked_cut(&lying, |_| ()).unwrap_err();
+    assert!(e.contains("tree chunk's point count differs"), "{e}");
+}
+
+#[test]
+fn random_corruptions_of_tree_chunks_never_panic() {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    let cut = tree_chunked_cut(&g);
+    let mut rng = ChaCha8Rng::seed_from_u64(0x7E);
+    let (mut accepted, mut refused) = (0, 0);
+    for _ in 0..2000 {
+        let (i, op, value) = (
+            rng.r#gen::<usize>(),
+            rng.gen_range(0..3),
+            rng.r#gen::<u32>(),
+        );
+        let outcome = check_tree_chunked_cut(&cut, |trees| {
+            let b = &mut trees[0];
+            let i = i % (b.len() - 4);
+            match op {
+                0 => b[i] ^= 1 << (value % 8),
+                1 => b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes()),
+                _ => b[i..i + 4].copy_from_slice(&(value % 64).to_le_bytes()),
+            }
+        });
+        match outcome {
+            Ok(_) => accepted += 1,
+            Err(e) => {
+                assert!(!e.is_empty());
+                refused += 1;
+            }
+        }
+    }
     assert!(
         accepted > 100 && refused > 100,
         "accepted {accepted}, refused {refused}"

@@ -13,8 +13,8 @@ use ygg_store::query::{
     nodes_within_radius, visible, within_index,
 };
 use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, SegmentCache, archive, validate_chunk, validate_layer,
-    validate_manifest,
+    ArchivedScene, SegmentBytes, SegmentCache, archive, is_tree_chunk_segment_id, validate_chunk,
+    validate_layer, validate_manifest, validate_tree_chunk,
 };
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView, Scope, distance_squared};
 
@@ -372,9 +372,11 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
 
 /// A publishing writer and a reader in one: the writer's cache patches the layer indexes
 /// it built before and chunks every layer of more than [`CHUNK`] points (small, so that
-/// chunk boundaries fall everywhere); like the transport, only chunks whose generation
-/// changed are sent, and the reader keeps the others as it got them. A chunk the cache
-/// failed to resend after its points changed would answer queries wrongly.
+/// chunk boundaries fall everywhere) and sends the base tree of every layer index of more
+/// than [`TREE_CHUNK`] points as a tree chunk; like the transport, only chunks whose
+/// generation changed are sent, and the reader keeps the others as it got them. A chunk
+/// the cache failed to resend after its points changed, or a tree after a fold, would
+/// answer queries wrongly.
 struct Publisher {
     segments: SegmentCache,
     /// Chunks the reader holds: segment id -> (generation, bytes).
@@ -384,10 +386,14 @@ struct Publisher {
 /// Points per chunk in [`Publisher`].
 const CHUNK: usize = 4;
 
+/// Fewest points of a layer index's base tree that [`Publisher`] sends as a tree chunk.
+const TREE_CHUNK: usize = 8;
+
 impl Publisher {
     fn new() -> Self {
         Publisher {
-            segments: SegmentCache::with_point_chunk_len(CHUNK),
+            segments: SegmentCache::with_point_chunk_len(CHUNK)
+                .with_tree_chunk_min_points(TREE_CHUNK),
             held: BTreeMap::new(),
         }
     }
@@ -397,7 +403,7 @@ impl Publisher {
     fn publish(&mut self, g: &mut SceneGraph) -> (SegmentBytes, Vec<SegmentBytes>, Vec<u32>) {
         let layers: Vec<LayerId> = g.layers().collect();
         let mut archived = Vec::new();
-        let mut ids = Vec::new();
+        let (mut ids, mut tree_ids) = (Vec::new(), Vec::new());
         for l in layers {
             let p = self.segments.published_layer(g, l);
             archived.push(archive(p.segment));
@@ -407,7 +413,14 @@ impl Publisher {
                 }
                 ids.push(id);
             }
+            if let Some((id, generation, tree)) = p.tree_chunk() {
+                if self.held.get(&id).map(|h| h.0) != Some(generation) {
+                    self.held.insert(id, (generation, archive(&tree)));
+                }
+                tree_ids.push(id);
+            }
         }
+        ids.extend(tree_ids);
         self.held.retain(|id, _| ids.contains(id));
         (archive(self.segments.manifest(g, 1)), archived, ids)
     }
@@ -422,11 +435,18 @@ fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Prob
         .iter()
         .map(|l| validate_layer(l, "layer").unwrap())
         .collect();
-    let chunks = chunk_ids
+    let (tree_ids, point_ids): (Vec<u32>, Vec<u32>) = chunk_ids
+        .iter()
+        .partition(|id| is_tree_chunk_segment_id(**id));
+    let chunks = point_ids
         .iter()
         .map(|id| validate_chunk(&publisher.held[id].1, "chunk").unwrap())
         .collect();
-    let view = ArchivedScene::new(manifest, layers, chunks).unwrap();
+    let trees = tree_ids
+        .iter()
+        .map(|id| validate_tree_chunk(&publisher.held[id].1, "tree chunk").unwrap())
+        .collect();
+    let view = ArchivedScene::new(manifest, layers, chunks, trees).unwrap();
     check_view(&view, probes);
     for l in g.layers() {
         assert_eq!(
@@ -862,5 +882,52 @@ fn corrupted_indexed_snapshots_are_refused_or_answer_without_panic() {
     assert!(
         refused > 0 && answered > 0,
         "{refused} refused, {answered} answered"
+    );
+}
+
+/// A fold that keeps the layer index's point count (every node moved, none added) builds
+/// a new base tree of the same size: its tree chunk must go out again, or a reader that
+/// kept the old one answers from the old positions.
+#[test]
+fn a_fold_that_keeps_the_point_count_resends_the_tree_chunk() {
+    let mut g = SceneGraph::new();
+    let mesh = g.add_layer("mesh").unwrap();
+    for i in 0..100u64 {
+        g.add_node(NodeId(i), mesh).unwrap();
+        let p = [(i % 10) as i8 - 5, (i / 10) as i8 - 5, 0];
+        g.set_geometry(NodeId(i), cluster(&p, 50)).unwrap();
+    }
+    g.enable_layer_index(mesh).unwrap();
+    let probes: Vec<Probe> = (0..6i8)
+        .map(|i| Probe {
+            c: [i - 3, 2 - i, i % 3],
+            m: [1, 10, 60][i as usize % 3],
+            r: i as u8 + 1,
+            dir: [1, 0, 0],
+            half_angle: 20,
+            range: 8,
+        })
+        .collect();
+    let mut publisher = Publisher::new();
+    let mut resent = 0;
+    let mut last = None;
+    for i in 0..40u64 {
+        // Moved far off: 50 points each, as many as before.
+        let p = [(i % 10) as i8 - 5, (i / 10) as i8 + 2, 3];
+        g.set_geometry(NodeId(i), cluster(&p, 50)).unwrap();
+        check_published(&mut g, &mut publisher, &probes);
+        let tree = publisher
+            .held
+            .iter()
+            .find(|(id, _)| is_tree_chunk_segment_id(**id))
+            .map(|(_, (generation, _))| *generation);
+        assert!(tree.is_some(), "the 5,000-point tree travels as a chunk");
+        resent += usize::from(last.is_some() && tree != last);
+        last = tree;
+    }
+    // The patch folds past 1,024 live points: once in 40 moves of 50 points.
+    assert_eq!(
+        resent, 1,
+        "the tree chunk is resent at the fold, and only then"
     );
 }

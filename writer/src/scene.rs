@@ -16,11 +16,12 @@ pub struct PublishReport {
     pub generation: u64,
     /// Layers whose segment was (re)published.
     pub layers_sent: usize,
-    /// Point chunks of chunked layers (re)published: those whose points changed.
+    /// Chunks (re)published: point chunks whose points changed, and layer index trees
+    /// built anew.
     pub chunks_sent: usize,
     /// Layers left as they were.
     pub layers_unchanged: usize,
-    /// Bytes archived into shared memory (layer segments, point chunks and manifest).
+    /// Bytes archived into shared memory (layer segments, chunks and manifest).
     pub bytes_sent: usize,
 }
 
@@ -221,9 +222,9 @@ impl SceneWriter {
             self.segments.published_layer(&mut self.graph, *layer);
         }
         let chunks = |l: &LayerId| {
-            self.segments
-                .published(*l)
-                .map_or(0, |p| p.segment.point_chunks.len())
+            self.segments.published(*l).map_or(0, |p| {
+                p.segment.point_chunks.len() + usize::from(p.tree_chunk().is_some())
+            })
         };
         let segments = layers.len() + layers.iter().map(chunks).sum::<usize>();
         if segments > self.max_layers() {
@@ -260,6 +261,17 @@ impl SceneWriter {
                     report.chunks_sent += 1;
                     report.bytes_sent += len;
                 }
+                if let Some((id, tree_generation, chunk)) = published.tree_chunk()
+                    && self.publisher.layer_generation(id) != Some(tree_generation)
+                {
+                    let len = chunk.archived_len();
+                    self.publisher
+                        .try_publish_layer(id, tree_generation, len, |buf| {
+                            chunk.archive_into(buf).map(|_| ())
+                        })?;
+                    report.chunks_sent += 1;
+                    report.bytes_sent += len;
+                }
             } else {
                 report.layers_unchanged += 1;
             }
@@ -268,12 +280,23 @@ impl SceneWriter {
                 generation,
             });
         }
-        // Chunk ids sort after every layer id, each layer's in column order.
+        // Chunk ids sort after every layer id: point chunks by layer, each layer's in
+        // column order, then tree chunks by layer.
         for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
             entries.extend(
                 published
                     .chunks()
                     .map(|(layer_id, generation)| ManifestEntry {
+                        layer_id,
+                        generation,
+                    }),
+            );
+        }
+        for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
+            entries.extend(
+                published
+                    .tree_chunk()
+                    .map(|(layer_id, generation, _)| ManifestEntry {
                         layer_id,
                         generation,
                     }),

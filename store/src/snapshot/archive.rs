@@ -2,10 +2,10 @@
 //! [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
 //! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
 
-use super::chunk::PointChunkSource;
+use super::chunk::{PointChunkSource, TreeChunkSource};
 use super::schema::{
     FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
-    NodeIndexSegment, PointChunk,
+    NodeIndexSegment, PointChunk, TreeChunk,
 };
 use crate::bytes::{SegmentBytes, archive};
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
@@ -350,6 +350,8 @@ in_place_archiving!(LayerSegment);
 in_place_archiving!(Manifest);
 in_place_archiving!(PointChunk);
 in_place_archiving!(PointChunkSource<'_>);
+in_place_archiving!(TreeChunk);
+in_place_archiving!(TreeChunkSource<'_>);
 
 impl SceneGraph {
     /// The index of `layer` for a snapshot, if it has one: a kd-tree over the points of
@@ -374,6 +376,7 @@ impl SceneGraph {
             base_rows: segment.ids.len() as u32,
             base_points: entries.len() as u32,
             tree: build_tree(&entries),
+            tree_chunk: None,
             patched: Vec::new(),
         })
     }

@@ -23,7 +23,7 @@
 //! mutations.
 
 use super::archive::StringTable;
-use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN};
+use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
 use super::schema::{LayerSegment, Manifest};
@@ -56,6 +56,8 @@ pub struct SegmentCache {
     layers: FxHashMap<LayerId, Box<Cached>>,
     /// Points per chunk of a chunked layer ([`SegmentCache::published_layer`]).
     point_chunk_len: usize,
+    /// Fewest points of a layer index's base tree sent as a tree chunk.
+    tree_chunk_min_points: usize,
     /// The last manifest, the graph's structure and terms generations it was built at, and
     /// its archived length once asked for ([`SegmentCache::manifest_with_len`]).
     manifest: Option<CachedManifest>,
@@ -99,6 +101,7 @@ impl Default for SegmentCache {
         SegmentCache {
             layers: FxHashMap::default(),
             point_chunk_len: POINT_CHUNK_LEN,
+            tree_chunk_min_points: TREE_CHUNK_MIN_POINTS,
             manifest: None,
         }
     }
@@ -117,6 +120,16 @@ impl SegmentCache {
         SegmentCache {
             point_chunk_len: len.next_power_of_two().min(MAX_POINT_CHUNK_LEN),
             ..Self::default()
+        }
+    }
+
+    /// This cache, sending the base tree of every layer index of `min_points` or more
+    /// points (default [`TREE_CHUNK_MIN_POINTS`]) as a tree chunk: small values exercise
+    /// tree chunks in tests.
+    pub fn with_tree_chunk_min_points(self, min_points: usize) -> Self {
+        SegmentCache {
+            tree_chunk_min_points: min_points,
+            ..self
         }
     }
 
@@ -145,9 +158,11 @@ impl SegmentCache {
         graph: &mut SceneGraph,
         layer: LayerId,
     ) -> PublishedLayer<'_> {
-        let chunk_len = self.point_chunk_len;
+        let (chunk_len, tree_min) = (self.point_chunk_len, self.tree_chunk_min_points);
         let cached = self.update(graph, layer);
-        cached.chunks.publish_form(&mut cached.segment, chunk_len);
+        cached
+            .chunks
+            .publish_form(&mut cached.segment, chunk_len, tree_min);
         PublishedLayer::new(&cached.segment, &cached.chunks)
     }
 
@@ -363,7 +378,8 @@ fn patched(
     };
 
     if changes.geometry || s.layer_index.is_some() {
-        update_layer_index(graph, layer, &mut s, point_changes, &mut index_killed);
+        chunks.tree_rebuilt |=
+            update_layer_index(graph, layer, &mut s, point_changes, &mut index_killed);
     }
     let mut roots = changes.index_roots;
     roots.sort_unstable();

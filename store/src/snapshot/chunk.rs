@@ -3,11 +3,18 @@
 //! chunks it touches (appending to a mesh node sends the last chunk and the small layer
 //! segment, not the whole column) and a reader keeps, and validated once, the rest.
 //!
+//! A large layer index's base tree is published the same way, as a [`TreeChunk`]: sent
+//! when the base is built or folded, not with every patch of the index.
+//!
 //! A chunk travels as a segment of its own, under a segment id derived from its layer
-//! and place ([`chunk_segment_id`]): ids with the top bit set, so that a cut's segments
-//! sorted by id list its layers first and then each layer's chunks in column order.
+//! and place ([`chunk_segment_id`], [`tree_chunk_segment_id`]): ids with the top bit
+//! set, so that a cut's segments sorted by id list its layers first, then each layer's
+//! point chunks in column order, then the tree chunks.
 
-use super::schema::{ArchivedPointChunk, FORMAT_VERSION, PointChunk};
+use super::schema::{
+    ArchivedPointChunk, ArchivedTreeChunk, ArchivedTreeChunkRef, FORMAT_VERSION, PointChunk,
+};
+use crate::index::{KdTree, check_tree};
 use crate::{LayerId, Point, SnapshotError};
 use rkyv::munge::munge;
 use rkyv::rancor::Fallible;
@@ -25,6 +32,13 @@ pub const MAX_POINT_CHUNK_LEN: usize = 1 << 16;
 /// Top bit of a segment id: set for chunks, clear for layers.
 const CHUNK_ID_BIT: u32 = 1 << 31;
 
+/// Second bit of a chunk's segment id: set for tree chunks, clear for point chunks.
+const TREE_CHUNK_BIT: u32 = 1 << 30;
+
+/// Fewest points a layer index's base tree has for a publishing writer to send it as a
+/// [`TreeChunk`] (about 32 KiB archived); smaller trees stay in their layer segment.
+pub const TREE_CHUNK_MIN_POINTS: usize = 2048;
+
 /// Bits of a chunk's segment id that hold its place in the column.
 const CHUNK_INDEX_BITS: u32 = 11;
 
@@ -33,7 +47,7 @@ pub const MAX_CHUNKS_PER_LAYER: usize = 1 << CHUNK_INDEX_BITS;
 
 /// Layer ids below this may be chunked (the layer id must fit the segment id's bits,
 /// and no chunk may take the manifest's id `u32::MAX`).
-const CHUNKABLE_LAYERS: u32 = (1 << (31 - CHUNK_INDEX_BITS)) - 1;
+const CHUNKABLE_LAYERS: u32 = (1 << (30 - CHUNK_INDEX_BITS)) - 1;
 
 /// Largest layer id a snapshot may hold: segment ids at or above it name chunks.
 pub const MAX_LAYER_ID: u32 = CHUNK_ID_BIT - 1;
@@ -45,15 +59,33 @@ pub fn chunk_segment_id(layer: LayerId, index: usize) -> Option<u32> {
         .then_some(CHUNK_ID_BIT | layer.0 << CHUNK_INDEX_BITS | index as u32)
 }
 
+/// The segment id of tree chunk `slot` of `layer` (0: its layer index's base tree), if
+/// that layer's trees can be chunked.
+pub fn tree_chunk_segment_id(layer: LayerId, slot: usize) -> Option<u32> {
+    chunk_segment_id(layer, slot).map(|id| id | TREE_CHUNK_BIT)
+}
+
 /// Whether a segment id names a chunk (not a layer, not the manifest).
 pub fn is_chunk_segment_id(id: u32) -> bool {
     id & CHUNK_ID_BIT != 0 && id != u32::MAX
+}
+
+/// Whether a segment id names a tree chunk (not a point chunk, a layer or the manifest).
+pub fn is_tree_chunk_segment_id(id: u32) -> bool {
+    is_chunk_segment_id(id) && id & TREE_CHUNK_BIT != 0
 }
 
 /// Whether a layer with `points` points is published in chunks of `chunk_len`: when it
 /// has more than one chunk's worth and its chunks fit the segment ids.
 pub(crate) fn is_chunked(layer: LayerId, points: usize, chunk_len: usize) -> bool {
     points > chunk_len && chunk_segment_id(layer, chunk_count(points, chunk_len) - 1).is_some()
+}
+
+/// Whether a layer index's base tree of `points` points is published as a tree chunk
+/// by a writer that sends trees of `min_points` or more as chunks: when it is that large
+/// (and not empty) and its layer's ids fit the segment ids.
+pub(crate) fn has_tree_chunk(layer: LayerId, points: usize, min_points: usize) -> bool {
+    points >= min_points.max(1) && tree_chunk_segment_id(layer, 0).is_some()
 }
 
 /// Chunks of `chunk_len` a column of `points` points takes.
@@ -123,6 +155,91 @@ impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSourc
     }
 }
 
+/// A layer index's base tree archived as a [`TreeChunk`] straight from the tree it
+/// holds (no copy of the tree).
+#[derive(Debug, Clone, Copy)]
+pub struct TreeChunkSource<'a> {
+    layer: u32,
+    slot: u32,
+    generation: u64,
+    items: u32,
+    tree: &'a KdTree,
+}
+
+impl<'a> TreeChunkSource<'a> {
+    /// Tree chunk `slot` of `layer`, at `generation`, holding `tree` whose items are
+    /// below `items`.
+    pub fn new(layer: LayerId, slot: usize, generation: u64, items: u32, tree: &'a KdTree) -> Self {
+        TreeChunkSource {
+            layer: layer.0,
+            slot: slot as u32,
+            generation,
+            items,
+            tree,
+        }
+    }
+}
+
+impl Archive for TreeChunkSource<'_> {
+    type Archived = ArchivedTreeChunk;
+    type Resolver = <KdTree as Archive>::Resolver;
+
+    fn resolve(&self, resolver: Self::Resolver, out: Place<ArchivedTreeChunk>) {
+        munge!(let ArchivedTreeChunk { version, layer, slot, generation, items, tree } = out);
+        FORMAT_VERSION.resolve((), version);
+        self.layer.resolve((), layer);
+        self.slot.resolve((), slot);
+        self.generation.resolve((), generation);
+        self.items.resolve((), items);
+        self.tree.resolve(resolver, tree);
+    }
+}
+
+impl<S> Serialize<S> for TreeChunkSource<'_>
+where
+    S: Fallible + Allocator + Writer + ?Sized,
+    KdTree: Serialize<S>,
+{
+    fn serialize(&self, serializer: &mut S) -> Result<Self::Resolver, S::Error> {
+        self.tree.serialize(serializer)
+    }
+}
+
+/// Checks a tree chunk on its own: its tree passes [`check_tree`] with items below the
+/// chunk's `items`. Whether it is the tree its layer names is checked when the cut is
+/// joined ([`check_tree_chunk_matches`]).
+pub(crate) fn check_tree_chunk(chunk: &ArchivedTreeChunk) -> Result<(), String> {
+    check_tree(&chunk.tree, chunk.items.to_native() as usize)
+}
+
+/// Checks a tree chunk against the layer index that names it: same layer, slot 0, the
+/// generation and point count of `r`, items within the index's base rows.
+pub(crate) fn check_tree_chunk_matches(
+    chunk: &ArchivedTreeChunk,
+    layer: u32,
+    base_rows: u32,
+    r: &ArchivedTreeChunkRef,
+) -> Result<(), String> {
+    if chunk.layer != layer
+        || chunk.slot != 0
+        || chunk.generation != r.generation
+        || chunk.tree.size() != r.points.to_native() as usize
+        || chunk.items.to_native() > base_rows
+    {
+        return Err(format!(
+            "tree chunk segment (layer {}, slot {}, generation {}, {} points, items below {}) where layer {layer} names its index tree at generation {} with {} points, items below {base_rows}",
+            chunk.layer,
+            chunk.slot,
+            chunk.generation,
+            chunk.tree.size(),
+            chunk.items,
+            r.generation,
+            r.points
+        ));
+    }
+    Ok(())
+}
+
 /// Checks the chunk list of a layer segment: a chunk length that is a power of two up
 /// to [`MAX_POINT_CHUNK_LEN`], every chunk but the last full, the last not empty, no more
 /// than [`MAX_CHUNKS_PER_LAYER`]. Returns the points they hold.
@@ -185,17 +302,21 @@ pub(crate) fn check_chunk_matches(
 impl crate::SceneGraph {
     /// Segments a snapshot of this graph takes when published in point chunks of
     /// `chunk_len` ([`POINT_CHUNK_LEN`] by default): one per layer, plus the point chunks
-    /// of each chunked layer (for sizing a publisher's bound on segments per cut).
+    /// of each chunked layer and the tree chunk of each large layer index (for sizing a
+    /// publisher's bound on segments per cut).
     pub fn snapshot_segments(&self, chunk_len: usize) -> usize {
         self.layers
             .iter()
             .map(|(&id, l)| {
                 let points = l.nodes.iter().map(|n| self.nodes[n].points.len()).sum();
-                1 + if is_chunked(id, points, chunk_len) {
+                let point_chunks = if is_chunked(id, points, chunk_len) {
                     chunk_count(points, chunk_len)
                 } else {
                     0
-                }
+                };
+                let tree_chunk = self.indexes.layers.contains_key(&id)
+                    && has_tree_chunk(id, points, TREE_CHUNK_MIN_POINTS);
+                1 + point_chunks + usize::from(tree_chunk)
             })
             .sum()
     }
@@ -217,7 +338,7 @@ pub(crate) fn chunk_error(what: &str, reason: impl Into<String>) -> SnapshotErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::snapshot::archive;
+    use crate::snapshot::{TreeChunk, archive};
 
     #[test]
     fn a_chunk_archived_from_its_column_is_the_owned_chunks_archive() {
@@ -228,6 +349,43 @@ mod tests {
             assert_eq!(source.archived_len(), owned.archived_len());
             assert_eq!(&archive(&source)[..], &archive(&owned)[..]);
         }
+    }
+
+    #[test]
+    fn a_tree_chunk_archived_from_its_tree_is_the_owned_chunks_archive() {
+        let entries: Vec<(u32, Point)> = (0..3000u32)
+            .map(|i| (i / 3, [i as f32, (i % 7) as f32, 0.5]))
+            .collect();
+        let tree = crate::index::build_tree(&entries);
+        let source = TreeChunkSource::new(LayerId(7), 0, 42, 1000, &tree);
+        let owned = TreeChunk {
+            version: FORMAT_VERSION,
+            layer: 7,
+            slot: 0,
+            generation: 42,
+            items: 1000,
+            tree: crate::index::build_tree(&entries),
+        };
+        assert_eq!(source.archived_len(), owned.archived_len());
+        assert_eq!(&archive(&source)[..], &archive(&owned)[..]);
+        let bytes = archive(&source);
+        let chunk = crate::snapshot::validate_tree_chunk(&bytes, "tree").unwrap();
+        assert_eq!(chunk.tree.size(), 3000);
+    }
+
+    #[test]
+    fn tree_chunk_ids_sort_after_every_point_chunk() {
+        let last_point = chunk_segment_id(LayerId(CHUNKABLE_LAYERS - 1), MAX_CHUNKS_PER_LAYER - 1);
+        let first_tree = tree_chunk_segment_id(LayerId(0), 0).unwrap();
+        assert!(last_point.unwrap() < first_tree);
+        assert!(is_tree_chunk_segment_id(first_tree) && is_chunk_segment_id(first_tree));
+        assert!(!is_tree_chunk_segment_id(last_point.unwrap()));
+        let last_tree = tree_chunk_segment_id(LayerId(CHUNKABLE_LAYERS - 1), 0).unwrap();
+        assert!(last_tree != u32::MAX && is_tree_chunk_segment_id(last_tree));
+        assert!(
+            !is_tree_chunk_segment_id(u32::MAX),
+            "the manifest's id is no chunk"
+        );
     }
 
     #[test]

@@ -1,10 +1,15 @@
 //! What a publishing writer's [`super::SegmentCache`] keeps per chunked layer: which
 //! column positions changed since the last publish ([`ChangedPoints`]) and each chunk's
 //! generation ([`ChunkState`]), so that a publish resends only the chunks whose points
-//! changed; and [`PublishedLayer`], a layer as it is published.
+//! changed, and the layer index's base tree only when it was built anew; and
+//! [`PublishedLayer`], a layer as it is published.
 
-use super::chunk::{PointChunkSource, chunk_count, chunk_range, chunk_segment_id, is_chunked};
-use super::schema::{LayerSegment, PointChunkRef};
+use super::chunk::{
+    PointChunkSource, TreeChunkSource, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
+    is_chunked, tree_chunk_segment_id,
+};
+use super::schema::{LayerSegment, PointChunkRef, TreeChunkRef};
+use crate::index::{KdTree, build_tree};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 use std::ops::Range;
 
@@ -109,6 +114,13 @@ pub(super) struct ChunkState {
     pub(super) changed: ChangedPoints,
     /// Points per chunk of `refs`.
     chunk_len: usize,
+    /// The tree chunk of the layer index's base tree last published (`None` when the
+    /// tree went inline, or not yet).
+    tree_ref: Option<TreeChunkRef>,
+    /// The base tree, moved out of the segment while it is in published form.
+    tree_aside: Option<KdTree>,
+    /// Whether the base tree was built anew since the last publish.
+    pub(super) tree_rebuilt: bool,
 }
 
 impl ChunkState {
@@ -116,12 +128,20 @@ impl ChunkState {
     pub(super) fn fresh() -> Self {
         ChunkState {
             changed: ChangedPoints::All,
+            tree_rebuilt: true,
             ..ChunkState::default()
         }
     }
 
-    /// Puts the column back into `segment` (the form the cache patches).
+    /// Puts the column and the base tree back into `segment` (the form the cache
+    /// patches).
     pub(super) fn restore(&mut self, segment: &mut LayerSegment) {
+        if let Some(tree) = self.tree_aside.take()
+            && let Some(index) = segment.layer_index.as_mut()
+        {
+            index.tree = tree;
+            index.tree_chunk = None;
+        }
         if !segment.point_chunks.is_empty() {
             segment.points = std::mem::take(&mut self.aside);
             segment.point_chunks.clear();
@@ -132,8 +152,16 @@ impl ChunkState {
     /// Brings the chunks up to date with `segment` and puts it in published form: for a
     /// layer of more than `chunk_len` points its points move aside and `point_chunks`
     /// lists the chunks, each at the generation it last changed (the segment's
-    /// generation if it changed since the last publish).
-    pub(super) fn publish_form(&mut self, segment: &mut LayerSegment, chunk_len: usize) {
+    /// generation if it changed since the last publish). A layer index's base tree of
+    /// `tree_min_points` or more moves aside too, named by its tree chunk, which keeps
+    /// its generation until the tree is built anew.
+    pub(super) fn publish_form(
+        &mut self,
+        segment: &mut LayerSegment,
+        chunk_len: usize,
+        tree_min_points: usize,
+    ) {
+        self.tree_publish_form(segment, tree_min_points);
         let layer = LayerId(segment.layer);
         let total = segment.points.len();
         let changed = std::mem::take(&mut self.changed);
@@ -165,14 +193,43 @@ impl ChunkState {
     }
 }
 
+impl ChunkState {
+    /// The base tree's part of [`ChunkState::publish_form`].
+    fn tree_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
+        let rebuilt = std::mem::take(&mut self.tree_rebuilt);
+        let layer = LayerId(segment.layer);
+        let Some(index) = segment
+            .layer_index
+            .as_mut()
+            .filter(|i| has_tree_chunk(layer, i.base_points as usize, min_points))
+        else {
+            self.tree_ref = None;
+            return;
+        };
+        let generation = match self.tree_ref {
+            Some(old) if !rebuilt && old.points == index.base_points => old.generation,
+            _ => segment.generation,
+        };
+        let r = TreeChunkRef {
+            generation,
+            points: index.base_points,
+        };
+        self.tree_ref = Some(r);
+        index.tree_chunk = Some(r);
+        self.tree_aside = Some(std::mem::replace(&mut index.tree, build_tree(&[])));
+    }
+}
+
 /// A layer as a publishing writer sends it: the layer segment (points moved to chunks
-/// when the layer is chunked) and its point chunks, each with its segment id and
-/// generation ([`super::SegmentCache::published_layer`]).
+/// when the layer is chunked, a large layer index's base tree moved to a tree chunk),
+/// its point chunks and its tree chunk, each with its segment id and generation
+/// ([`super::SegmentCache::published_layer`]).
 #[derive(Debug, Clone, Copy)]
 pub struct PublishedLayer<'c> {
     /// The layer segment.
     pub segment: &'c LayerSegment,
     points: &'c [Point],
+    tree: Option<&'c KdTree>,
 }
 
 impl<'c> PublishedLayer<'c> {
@@ -182,7 +239,31 @@ impl<'c> PublishedLayer<'c> {
         } else {
             &state.aside[..]
         };
-        PublishedLayer { segment, points }
+        let tree = segment
+            .layer_index
+            .as_ref()
+            .and_then(|i| i.tree_chunk)
+            .and(state.tree_aside.as_ref());
+        PublishedLayer {
+            segment,
+            points,
+            tree,
+        }
+    }
+
+    /// The layer index's base tree, if it travels as a tree chunk: its segment id,
+    /// generation, and the chunk ready to archive (the tree is not copied).
+    pub fn tree_chunk(&self) -> Option<(u32, u64, TreeChunkSource<'c>)> {
+        let layer = LayerId(self.segment.layer);
+        let index = self.segment.layer_index.as_ref()?;
+        let r = index.tree_chunk?;
+        let id = tree_chunk_segment_id(layer, 0).expect("a tree chunk's id fits");
+        let tree = self.tree?;
+        Some((
+            id,
+            r.generation,
+            TreeChunkSource::new(layer, 0, r.generation, index.base_rows, tree),
+        ))
     }
 
     /// The layer's point chunks: `(segment id, generation)` each, in column order (none

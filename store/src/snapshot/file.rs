@@ -179,7 +179,7 @@ impl SnapshotFile {
             )?);
         }
         // Files keep every layer's points inline: a file holds no chunk segments.
-        ArchivedScene::new(manifest, layers, Vec::new()).map_err(|reason| {
+        ArchivedScene::new(manifest, layers, Vec::new(), Vec::new()).map_err(|reason| {
             SnapshotError::Inconsistent {
                 what: what.to_owned(),
                 reason,
@@ -207,7 +207,7 @@ impl SnapshotFile {
             .map(|r| unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(&data[r.clone()]) })
             .collect();
         // `from_backing` ran `ArchivedScene::new` on this cut.
-        ArchivedScene::new_prechecked(manifest, layers, Vec::new())
+        ArchivedScene::new_prechecked(manifest, layers, Vec::new(), Vec::new())
     }
 
     /// Size of the file in bytes.

@@ -95,17 +95,18 @@ impl PointChanges {
 /// Brings the layer index of `s` (rows up to date, index as it was) up to date after
 /// `changes`, by patching it or, past the budget, folding it (see the module docs);
 /// `killed` counts the base entries the patch killed so far and is reset by a fold.
+/// Returns whether a new base tree was built.
 pub(super) fn update_layer_index(
     graph: &SceneGraph,
     layer: LayerId,
     s: &mut LayerSegment,
     changes: PointChanges,
     killed: &mut usize,
-) {
+) -> bool {
     let Some(mut index) = s.layer_index.take() else {
         s.layer_index = graph.archived_layer_index(layer, s);
         *killed = 0;
-        return;
+        return true;
     };
     let rows = s.ids.len() as u32;
     let offsets = &s.point_offsets;
@@ -129,8 +130,10 @@ pub(super) fn update_layer_index(
     if live > FOLD_MIN.max(base / 8) || *killed > FOLD_MIN.max(base / 4) {
         s.layer_index = graph.archived_layer_index(layer, s);
         *killed = 0;
+        true
     } else {
         s.layer_index = Some(index);
+        false
     }
 }
 

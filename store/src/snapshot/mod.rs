@@ -43,18 +43,19 @@ pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
 pub use chunk::{
     MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, PointChunkSource,
-    chunk_segment_id, is_chunk_segment_id,
+    TREE_CHUNK_MIN_POINTS, TreeChunkSource, chunk_segment_id, is_chunk_segment_id,
+    is_tree_chunk_segment_id, tree_chunk_segment_id,
 };
 pub use chunk_state::PublishedLayer;
 pub use file::{FILE_MAGIC, SnapshotFile};
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
-    ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, FORMAT_VERSION,
-    LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NodeIndexSegment, PointChunk,
-    PointChunkRef,
+    ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, ArchivedTreeChunk,
+    ArchivedTreeChunkRef, FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer,
+    NodeIndexSegment, PointChunk, PointChunkRef, TreeChunk, TreeChunkRef,
 };
 pub use validate::{
-    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, validate_chunk,
-    validate_layer, validate_manifest,
+    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
+    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
 };
 pub use view::{ArchivedNodeRef, ArchivedScene};

@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -113,6 +113,34 @@ pub struct PointChunk {
     pub points: Vec<[f32; 3]>,
 }
 
+/// A kd-tree published as a segment of its own, as its layer segment names it.
+#[derive(Archive, Serialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TreeChunkRef {
+    /// The generation of the tree chunk segment: the layer generation at which the tree
+    /// was built.
+    pub generation: u64,
+    /// Points in the tree.
+    pub points: u32,
+}
+
+/// A kd-tree of a layer published as a segment of its own ([`TreeChunkRef`]), so that
+/// it is sent once per build rather than with every change of its layer.
+#[derive(Archive, Serialize, Debug)]
+pub struct TreeChunk {
+    /// [`FORMAT_VERSION`] of the writer.
+    pub version: u32,
+    /// The layer whose tree this is.
+    pub layer: u32,
+    /// The tree's place among its layer's tree chunks (0: the layer index's base tree).
+    pub slot: u32,
+    /// The chunk's generation (see [`TreeChunkRef::generation`]).
+    pub generation: u64,
+    /// Every item of `tree` is below this (the base rows of a layer index).
+    pub items: u32,
+    /// The tree.
+    pub tree: KdTree,
+}
+
 /// A layer index as archived: a base kd-tree plus the rows patched since it was built,
 /// so that a small change republishes the rows, not a rebuilt tree.
 ///
@@ -128,7 +156,12 @@ pub struct LayerIndexSegment {
     /// Points in `tree`.
     pub base_points: u32,
     /// The kd-tree over the points the rows had when it was built; items are rows.
+    /// Empty when the tree travels as a [`TreeChunk`] (`tree_chunk`).
     pub tree: KdTree,
+    /// The base tree's chunk, when it is published as a segment of its own (a large
+    /// tree, by a publishing writer): sent again only when the base is rebuilt, not
+    /// with every patch.
+    pub tree_chunk: Option<TreeChunkRef>,
     /// Rows whose points may differ from their base entries, ascending, each below the
     /// layer's row count; every row at or past `base_rows` with points is listed.
     pub patched: Vec<u32>,

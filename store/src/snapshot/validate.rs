@@ -7,9 +7,10 @@
     reason = "re-deriving references to bytes validated before"
 )]
 
-use super::chunk::{MAX_POINT_CHUNK_LEN, check_chunk_refs, chunk_error};
+use super::chunk::{MAX_POINT_CHUNK_LEN, check_chunk_refs, check_tree_chunk, chunk_error};
 use super::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, FORMAT_VERSION, u32s, u64s,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, FORMAT_VERSION,
+    u32s, u64s,
 };
 use crate::SnapshotError;
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
@@ -97,6 +98,30 @@ pub fn validate_chunk<'a>(
             ),
         ));
     }
+    Ok(c)
+}
+
+/// Validates tree-chunk bytes (bytecheck, version, the tree's structure with items below
+/// the chunk's bound). Whether the chunk is the tree its layer segment names is checked
+/// when the cut is joined ([`super::ArchivedScene::new`]).
+///
+/// # Errors
+/// Misaligned bytes, bytecheck failure, a foreign version, or a malformed tree.
+pub fn validate_tree_chunk<'a>(
+    bytes: &'a [u8],
+    what: &str,
+) -> Result<&'a ArchivedTreeChunk, SnapshotError> {
+    check_alignment(bytes, what)?;
+    let c = rkyv::access::<ArchivedTreeChunk, rkyv::rancor::Error>(bytes)
+        .map_err(|e| validation(what, e))?;
+    if c.version.to_native() != FORMAT_VERSION {
+        return Err(SnapshotError::SchemaVersion {
+            what: what.to_owned(),
+            found: c.version.to_native(),
+            expected: FORMAT_VERSION,
+        });
+    }
+    check_tree_chunk(c).map_err(|e| chunk_error(what, format!("tree chunk: {e}")))?;
     Ok(c)
 }
 
@@ -264,7 +289,15 @@ fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), St
     if let Some(index) = l.layer_index.as_ref() {
         let base_rows = index.base_rows.to_native() as usize;
         check_tree(&index.tree, base_rows).map_err(|e| format!("layer index: {e}"))?;
-        if index.tree.size() != index.base_points.to_native() as usize {
+        // A tree sent as a chunk is checked against this count when the cut is joined.
+        let inline_points = match index.tree_chunk.as_ref() {
+            Some(r) if r.points != index.base_points => {
+                return Err("layer index: its tree chunk's point count differs".into());
+            }
+            Some(_) => 0,
+            None => index.base_points.to_native() as usize,
+        };
+        if index.tree.size() != inline_points {
             return Err("layer index: base point count differs from its tree".into());
         }
         let patched = u32s(&index.patched);
@@ -428,6 +461,17 @@ pub unsafe fn chunk_unchecked(bytes: &[u8]) -> &ArchivedPointChunk {
     // SAFETY: the caller guarantees that `validate_chunk` accepted these very bytes and
     // that they have not changed since.
     unsafe { rkyv::access_unchecked::<ArchivedPointChunk>(bytes) }
+}
+
+/// Re-derives a tree chunk from bytes that [`validate_tree_chunk`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_tree_chunk`] accepted.
+pub unsafe fn tree_chunk_unchecked(bytes: &[u8]) -> &ArchivedTreeChunk {
+    // SAFETY: the caller guarantees that `validate_tree_chunk` accepted these very bytes
+    // and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedTreeChunk>(bytes) }
 }
 
 /// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.

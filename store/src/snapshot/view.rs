@@ -1,12 +1,13 @@
 //! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
 
-use super::chunk::{check_chunk_matches, chunk_points};
+use super::chunk::{check_chunk_matches, check_tree_chunk_matches, chunk_points};
 use super::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, NO_PARENT, u32s, u64s,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, NO_PARENT, u32s,
+    u64s,
 };
 use super::validate::{LayerPositions, check_dag};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
-use crate::index::{ArchivedIndex, RowPatch, SpatialIndex};
+use crate::index::{ArchivedIndex, ArchivedKdTree, RowPatch, SpatialIndex};
 use crate::points::PointColumn;
 use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Point, Points};
@@ -28,6 +29,9 @@ pub struct ArchivedScene<'a> {
     /// Per layer position (and one past the last), where its chunks start in `chunks`;
     /// empty when no layer is chunked.
     chunk_start: Vec<u32>,
+    /// The layer index base trees that travel as tree chunks, by layer position
+    /// (ascending).
+    index_trees: Vec<(u32, &'a ArchivedKdTree)>,
 }
 
 /// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
@@ -38,10 +42,11 @@ pub struct ArchivedNodeRef {
 }
 
 impl<'a> ArchivedScene<'a> {
-    /// Joins a validated manifest with its validated layer segments and the validated
-    /// point chunks of its chunked layers (in layer order, then column order), checking
-    /// that they form the cut the manifest names (same layers, same generations, same
-    /// counts, each chunk the one its layer names).
+    /// Joins a validated manifest with its validated layer segments, the validated point
+    /// chunks of its chunked layers (in layer order, then column order) and the validated
+    /// tree chunks of its layer indexes (in layer order), checking that they form the
+    /// cut the manifest names (same layers, same generations, same counts, each chunk the
+    /// one its layer names).
     ///
     /// # Errors
     /// A description of the first mismatch.
@@ -49,6 +54,7 @@ impl<'a> ArchivedScene<'a> {
         manifest: &'a ArchivedManifest,
         layers: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
+        trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Result<Self, String> {
         if manifest.layers.len() != layers.len() {
             return Err(format!(
@@ -106,7 +112,29 @@ impl<'a> ArchivedScene<'a> {
                 next.len() + 1
             ));
         }
-        Ok(Self::new_prechecked(manifest, layers, chunks))
+        let mut next = trees.iter();
+        for l in &layers {
+            if let Some(index) = l.layer_index.as_ref()
+                && let Some(r) = index.tree_chunk.as_ref()
+            {
+                let tree = next.next().ok_or_else(|| {
+                    format!("layer {} names its index's tree chunk, not given", l.layer)
+                })?;
+                check_tree_chunk_matches(
+                    tree,
+                    l.layer.to_native(),
+                    index.base_rows.to_native(),
+                    r,
+                )?;
+            }
+        }
+        if next.next().is_some() {
+            return Err(format!(
+                "{} tree chunks given that no layer names",
+                next.len() + 1
+            ));
+        }
+        Ok(Self::new_prechecked(manifest, layers, chunks, trees))
     }
 
     /// Joins a manifest with its layer segments that [`ArchivedScene::new`] already
@@ -117,6 +145,7 @@ impl<'a> ArchivedScene<'a> {
         manifest: &'a ArchivedManifest,
         layers: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
+        trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Self {
         let mut chunk_start = Vec::new();
         if !chunks.is_empty() {
@@ -128,11 +157,23 @@ impl<'a> ArchivedScene<'a> {
             }
             chunk_start.push(at);
         }
+        let index_trees = layers
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| {
+                l.layer_index
+                    .as_ref()
+                    .is_some_and(|i| i.tree_chunk.is_some())
+            })
+            .zip(trees)
+            .map(|((position, _), t)| (position as u32, &t.tree))
+            .collect();
         ArchivedScene {
             manifest,
             layers,
             chunks: chunks.into_iter().map(chunk_points).collect(),
             chunk_start,
+            index_trees,
         }
     }
 
@@ -407,15 +448,25 @@ impl SceneView for ArchivedScene<'_> {
     fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
         let (position, seg) = self.segment(layer)?;
         let index = seg.layer_index.as_ref()?;
+        let tree = match index.tree_chunk.as_ref() {
+            Some(_) => {
+                let at = self
+                    .index_trees
+                    .binary_search_by_key(&position, |(p, _)| *p)
+                    .ok()?;
+                self.index_trees[at].1
+            }
+            None => &index.tree,
+        };
         let patch = RowPatch::new(
             index.base_rows.to_native(),
             u32s(&index.patched),
             u32s(&seg.point_offsets),
             self.point_column(position),
         );
-        // `check_layer` bounded the tree's items by its base rows, and the patched rows
-        // by the layer's rows.
-        Some(ArchivedIndex::patched(&index.tree, u64s(&seg.ids), patch))
+        // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
+        // the tree's items by its base rows, and the patched rows by the layer's rows.
+        Some(ArchivedIndex::patched(tree, u64s(&seg.ids), patch))
     }
 
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
