@@ -341,25 +341,28 @@ fn inconsistent_point_chunks_are_refused_naming_what_is_wrong() {
     assert!(e.contains("point_offsets"), "{e}");
 }
 
-#[test]
-fn random_corruptions_of_point_chunks_never_panic() {
-    let mut g = sample_scene();
-    let objects = g.layer_by_name("objects").unwrap();
-    g.enable_layer_index(objects).unwrap();
-    let (m, l, c) = archive_cut(&chunked_cut(&g));
-    let mut rng = ChaCha8Rng::seed_from_u64(0xC4);
+/// Damages `b` at a random place: one bit flipped, or a 4-byte word overwritten with
+/// `u32::MAX` or a small number (a length or an offset gone wrong).
+fn damage(b: &mut [u8], rng: &mut ChaCha8Rng) {
+    let i = rng.gen_range(0..b.len() - 4);
+    match rng.gen_range(0..3) {
+        0 => b[i] ^= 1 << rng.gen_range(0..8),
+        1 => b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes()),
+        _ => b[i..i + 4].copy_from_slice(&(rng.r#gen::<u32>() % 64).to_le_bytes()),
+    }
+}
+
+/// Runs 2,000 random damages through `check` (which must not panic) and asserts that both
+/// outcomes occur often: damage inside coordinates still validates, damage in the
+/// structure is refused with a message.
+fn damages_are_refused_or_harmless(
+    seed: u64,
+    mut check: impl FnMut(&mut ChaCha8Rng) -> Result<usize, String>,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (mut accepted, mut refused) = (0, 0);
     for _ in 0..2000 {
-        let mut chunks = c.clone();
-        let k = rng.gen_range(0..chunks.len());
-        let b = &mut chunks[k];
-        let i = rng.gen_range(0..b.len() - 4);
-        match rng.gen_range(0..3) {
-            0 => b[i] ^= 1 << rng.gen_range(0..8),
-            1 => b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes()),
-            _ => b[i..i + 4].copy_from_slice(&(rng.r#gen::<u32>() % 64).to_le_bytes()),
-        }
-        match check_chunked_cut(&m, &l, &chunks) {
+        match check(&mut rng) {
             Ok(_) => accepted += 1,
             Err(e) => {
                 assert!(!e.is_empty());
@@ -367,11 +370,24 @@ fn random_corruptions_of_point_chunks_never_panic() {
             }
         }
     }
-    // Flips inside coordinates still validate; flips in the structure are refused.
     assert!(
         accepted > 100 && refused > 100,
         "accepted {accepted}, refused {refused}"
     );
+}
+
+#[test]
+fn random_corruptions_of_point_chunks_never_panic() {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    let (m, l, c) = archive_cut(&chunked_cut(&g));
+    damages_are_refused_or_harmless(0xC4, |rng| {
+        let mut chunks = c.clone();
+        let k = rng.gen_range(0..chunks.len());
+        damage(&mut chunks[k], rng);
+        check_chunked_cut(&m, &l, &chunks)
+    });
 }
 
 /// The sample scene's segments with the objects layer's index tree moved to a tree chunk
@@ -483,33 +499,7 @@ fn random_corruptions_of_tree_chunks_never_panic() {
     let objects = g.layer_by_name("objects").unwrap();
     g.enable_layer_index(objects).unwrap();
     let cut = tree_chunked_cut(&g);
-    let mut rng = ChaCha8Rng::seed_from_u64(0x7E);
-    let (mut accepted, mut refused) = (0, 0);
-    for _ in 0..2000 {
-        let (i, op, value) = (
-            rng.r#gen::<usize>(),
-            rng.gen_range(0..3),
-            rng.r#gen::<u32>(),
-        );
-        let outcome = check_tree_chunked_cut(&cut, |trees| {
-            let b = &mut trees[0];
-            let i = i % (b.len() - 4);
-            match op {
-                0 => b[i] ^= 1 << (value % 8),
-                1 => b[i..i + 4].copy_from_slice(&u32::MAX.to_le_bytes()),
-                _ => b[i..i + 4].copy_from_slice(&(value % 64).to_le_bytes()),
-            }
-        });
-        match outcome {
-            Ok(_) => accepted += 1,
-            Err(e) => {
-                assert!(!e.is_empty());
-                refused += 1;
-            }
-        }
-    }
-    assert!(
-        accepted > 100 && refused > 100,
-        "accepted {accepted}, refused {refused}"
-    );
+    damages_are_refused_or_harmless(0x7E, |rng| {
+        check_tree_chunked_cut(&cut, |trees| damage(&mut trees[0], rng))
+    });
 }

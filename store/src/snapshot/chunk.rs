@@ -36,7 +36,8 @@ const CHUNK_ID_BIT: u32 = 1 << 31;
 const TREE_CHUNK_BIT: u32 = 1 << 30;
 
 /// Fewest points a layer index's base tree has for a publishing writer to send it as a
-/// [`TreeChunk`] (about 32 KiB archived); smaller trees stay in their layer segment.
+/// [`TreeChunk`](super::TreeChunk) (about 32 KiB archived); smaller trees stay in their
+/// layer segment.
 pub const TREE_CHUNK_MIN_POINTS: usize = 2048;
 
 /// Bits of a chunk's segment id that hold its place in the column.
@@ -155,8 +156,8 @@ impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSourc
     }
 }
 
-/// A layer index's base tree archived as a [`TreeChunk`] straight from the tree it
-/// holds (no copy of the tree).
+/// A layer index's base tree archived as a [`TreeChunk`](super::TreeChunk) straight from
+/// the tree it holds (no copy of the tree).
 #[derive(Debug, Clone, Copy)]
 pub struct TreeChunkSource<'a> {
     layer: u32,

@@ -23,6 +23,31 @@ fn validation(what: &str, e: impl std::fmt::Display) -> SnapshotError {
     }
 }
 
+/// Checks alignment and rkyv's bytecheck of `bytes` as a `T`, then that the format
+/// version `version` reads off it is [`FORMAT_VERSION`].
+fn access_versioned<'a, T>(
+    bytes: &'a [u8],
+    what: &str,
+    version: impl FnOnce(&T) -> u32,
+) -> Result<&'a T, SnapshotError>
+where
+    T: rkyv::Portable
+        + for<'v> rkyv::bytecheck::CheckBytes<rkyv::api::high::HighValidator<'v, rkyv::rancor::Error>>,
+{
+    check_alignment(bytes, what)?;
+    let archived =
+        rkyv::access::<T, rkyv::rancor::Error>(bytes).map_err(|e| validation(what, e))?;
+    let found = version(archived);
+    if found != FORMAT_VERSION {
+        return Err(SnapshotError::SchemaVersion {
+            what: what.to_owned(),
+            found,
+            expected: FORMAT_VERSION,
+        });
+    }
+    Ok(archived)
+}
+
 /// Validates manifest bytes (bytecheck, version) and returns the archived manifest.
 ///
 /// # Errors
@@ -31,16 +56,7 @@ pub fn validate_manifest<'a>(
     bytes: &'a [u8],
     what: &str,
 ) -> Result<&'a ArchivedManifest, SnapshotError> {
-    check_alignment(bytes, what)?;
-    let m = rkyv::access::<ArchivedManifest, rkyv::rancor::Error>(bytes)
-        .map_err(|e| validation(what, e))?;
-    if m.version.to_native() != FORMAT_VERSION {
-        return Err(SnapshotError::SchemaVersion {
-            what: what.to_owned(),
-            found: m.version.to_native(),
-            expected: FORMAT_VERSION,
-        });
-    }
+    let m = access_versioned(bytes, what, |m: &ArchivedManifest| m.version.to_native())?;
     Ok(m)
 }
 
@@ -52,16 +68,9 @@ pub fn validate_layer<'a>(
     bytes: &'a [u8],
     what: &str,
 ) -> Result<&'a ArchivedLayerSegment, SnapshotError> {
-    check_alignment(bytes, what)?;
-    let l = rkyv::access::<ArchivedLayerSegment, rkyv::rancor::Error>(bytes)
-        .map_err(|e| validation(what, e))?;
-    if l.version.to_native() != FORMAT_VERSION {
-        return Err(SnapshotError::SchemaVersion {
-            what: what.to_owned(),
-            found: l.version.to_native(),
-            expected: FORMAT_VERSION,
-        });
-    }
+    let l = access_versioned(bytes, what, |l: &ArchivedLayerSegment| {
+        l.version.to_native()
+    })?;
     check_layer(l).map_err(|reason| SnapshotError::Inconsistent {
         what: what.to_owned(),
         reason,
@@ -79,16 +88,7 @@ pub fn validate_chunk<'a>(
     bytes: &'a [u8],
     what: &str,
 ) -> Result<&'a ArchivedPointChunk, SnapshotError> {
-    check_alignment(bytes, what)?;
-    let c = rkyv::access::<ArchivedPointChunk, rkyv::rancor::Error>(bytes)
-        .map_err(|e| validation(what, e))?;
-    if c.version.to_native() != FORMAT_VERSION {
-        return Err(SnapshotError::SchemaVersion {
-            what: what.to_owned(),
-            found: c.version.to_native(),
-            expected: FORMAT_VERSION,
-        });
-    }
+    let c = access_versioned(bytes, what, |c: &ArchivedPointChunk| c.version.to_native())?;
     if c.points.is_empty() || c.points.len() > MAX_POINT_CHUNK_LEN {
         return Err(chunk_error(
             what,
@@ -111,16 +111,7 @@ pub fn validate_tree_chunk<'a>(
     bytes: &'a [u8],
     what: &str,
 ) -> Result<&'a ArchivedTreeChunk, SnapshotError> {
-    check_alignment(bytes, what)?;
-    let c = rkyv::access::<ArchivedTreeChunk, rkyv::rancor::Error>(bytes)
-        .map_err(|e| validation(what, e))?;
-    if c.version.to_native() != FORMAT_VERSION {
-        return Err(SnapshotError::SchemaVersion {
-            what: what.to_owned(),
-            found: c.version.to_native(),
-            expected: FORMAT_VERSION,
-        });
-    }
+    let c = access_versioned(bytes, what, |c: &ArchivedTreeChunk| c.version.to_native())?;
     check_tree_chunk(c).map_err(|e| chunk_error(what, format!("tree chunk: {e}")))?;
     Ok(c)
 }
