@@ -70,7 +70,7 @@ struct PrivateCut {
 }
 
 impl SceneSnapshot {
-    /// The bytes queried: the manifest's and each segment's (layers, then point chunks),
+    /// The bytes queried: the manifest's and each segment's (layers, point chunks, then tree chunks),
     /// in `Snapshot::layers` order.
     fn bytes(&self) -> (&[u8], Vec<&[u8]>) {
         match &self.private {
@@ -269,7 +269,7 @@ impl SceneReader {
         self.subscriber.scene()
     }
 
-    /// How many segments (layers and point chunks) this reader has validated so far
+    /// How many segments (layers, point and tree chunks) this reader has validated so far
     /// (unchanged ones are not validated again).
     pub fn validations(&self) -> u64 {
         self.validations
