@@ -70,8 +70,8 @@ struct PrivateCut {
 }
 
 impl SceneSnapshot {
-    /// The bytes queried: the manifest's and each segment's (layers, point chunks, then tree chunks),
-    /// in `Snapshot::layers` order.
+    /// The bytes queried: the manifest's and each segment's (layers, point chunks, then
+    /// tree chunks), in `Snapshot::layers` order.
     fn bytes(&self) -> (&[u8], Vec<&[u8]>) {
         match &self.private {
             Some(p) => (&p.manifest, p.layers.iter().map(|l| &l[..]).collect()),
