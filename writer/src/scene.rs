@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
 use ygg_store::snapshot::{MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentCache};
-use ygg_store::{LayerId, SceneGraph, SceneView};
+use ygg_store::{LayerId, SceneGraph, SceneView, SnapshotError};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
 
@@ -249,28 +249,31 @@ impl SceneWriter {
                 report.layers_sent += 1;
                 report.bytes_sent += len;
                 for (index, (id, chunk_generation)) in published.chunks().enumerate() {
-                    if self.publisher.layer_generation(id) == Some(chunk_generation) {
-                        continue;
+                    if self.publisher.layer_generation(id) != Some(chunk_generation) {
+                        let chunk = published.chunk(index);
+                        let len = chunk.archived_len();
+                        send_chunk(
+                            &mut self.publisher,
+                            &mut report,
+                            id,
+                            chunk_generation,
+                            len,
+                            |buf| chunk.archive_into(buf),
+                        )?;
                     }
-                    let chunk = published.chunk(index);
-                    let len = chunk.archived_len();
-                    self.publisher
-                        .try_publish_layer(id, chunk_generation, len, |buf| {
-                            chunk.archive_into(buf).map(|_| ())
-                        })?;
-                    report.chunks_sent += 1;
-                    report.bytes_sent += len;
                 }
                 if let Some((id, tree_generation, chunk)) = published.tree_chunk()
                     && self.publisher.layer_generation(id) != Some(tree_generation)
                 {
                     let len = chunk.archived_len();
-                    self.publisher
-                        .try_publish_layer(id, tree_generation, len, |buf| {
-                            chunk.archive_into(buf).map(|_| ())
-                        })?;
-                    report.chunks_sent += 1;
-                    report.bytes_sent += len;
+                    send_chunk(
+                        &mut self.publisher,
+                        &mut report,
+                        id,
+                        tree_generation,
+                        len,
+                        |buf| chunk.archive_into(buf),
+                    )?;
                 }
             } else {
                 report.layers_unchanged += 1;
@@ -318,6 +321,22 @@ impl SceneWriter {
         report.bytes_sent += len;
         Ok(report)
     }
+}
+
+/// Sends chunk `id` at `generation`, `len` bytes that `archive` writes, and counts it in
+/// `report`.
+fn send_chunk(
+    publisher: &mut SegmentPublisher,
+    report: &mut PublishReport,
+    id: u32,
+    generation: u64,
+    len: usize,
+    archive: impl FnOnce(&mut [u8]) -> Result<usize, SnapshotError>,
+) -> Result<(), PublishError> {
+    publisher.try_publish_layer(id, generation, len, |buf| archive(buf).map(|_| ()))?;
+    report.chunks_sent += 1;
+    report.bytes_sent += len;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -191,9 +191,7 @@ impl ChunkState {
         segment.point_chunk_len = chunk_len as u32;
         self.aside = std::mem::take(&mut segment.points);
     }
-}
 
-impl ChunkState {
     /// The base tree's part of [`ChunkState::publish_form`].
     fn tree_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
         let rebuilt = std::mem::take(&mut self.tree_rebuilt);
