@@ -681,17 +681,17 @@ enum ygg_status ygg_snapshot_node_parent(const struct ygg_snapshot *snapshot,
                                          bool *has_parent,
                                          uint64_t *parent);
 
-// A node's children, ascending, zero-copy: `*ids` points to `*count` ids in the
-// snapshot's bytes (null when none).
+// A node's children, ascending (`YGG_STATUS_NOT_FOUND` for an unknown node). They are
+// gathered from the layers below the node's (a snapshot keeps nesting on the child's
+// side), so they come as a list, not a pointer into the snapshot.
 //
-// Ownership: as `ygg_snapshot_node_points`.
+// Ownership: as `ygg_snapshot_layer_nodes`.
 //
 // # Safety
-// `ids` and `count` are null or writable.
+// `list` is null or writable.
 enum ygg_status ygg_snapshot_node_children(const struct ygg_snapshot *snapshot,
                                            uint64_t node,
-                                           const uint64_t **ids,
-                                           size_t *count);
+                                           struct ygg_node_list *list);
 
 // A node's bounding box (min x y z, max x y z) if it keeps one and its sub-tree has a
 // point: `*has_box` says whether `box6` was written.

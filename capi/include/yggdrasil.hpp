@@ -315,10 +315,7 @@ public:
     return has ? std::optional<NodeId>(p) : std::nullopt;
   }
   std::vector<NodeId> children(NodeId node) const {
-    const std::uint64_t* ids = nullptr;
-    std::size_t n = 0;
-    check(ygg_snapshot_node_children(handle_, node, &ids, &n));
-    return std::vector<NodeId>(ids, ids + n);
+    return detail::ids([&](ygg_node_list* l) { return ygg_snapshot_node_children(handle_, node, l); });
   }
   /// The node's box: min x y z, max x y z.
   std::optional<std::array<float, 6>> aabb(NodeId node) const {

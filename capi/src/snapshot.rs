@@ -1,7 +1,7 @@
 //! The snapshot handle (`ygg_snapshot`): a validated, immutable cut of a scene (from a
 //! reader, a `.ygg` file or a graph), and its node accessors.
 //!
-//! Pointers the accessors return (points, children, strings) point into the snapshot's
+//! Pointers the accessors return (points, strings) point into the snapshot's
 //! mapped bytes: zero-copy, valid while the snapshot handle lives, never to be freed or
 //! written by the caller.
 //!
@@ -394,32 +394,26 @@ pub unsafe extern "C" fn ygg_snapshot_node_parent(
     })
 }
 
-/// A node's children, ascending, zero-copy: `*ids` points to `*count` ids in the
-/// snapshot's bytes (null when none).
+/// A node's children, ascending (`YGG_STATUS_NOT_FOUND` for an unknown node). They are
+/// gathered from the layers below the node's (a snapshot keeps nesting on the child's
+/// side), so they come as a list, not a pointer into the snapshot.
 ///
-/// Ownership: as `ygg_snapshot_node_points`.
+/// Ownership: as `ygg_snapshot_layer_nodes`.
 ///
 /// # Safety
-/// `ids` and `count` are null or writable.
+/// `list` is null or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn ygg_snapshot_node_children(
     snapshot: *const YggSnapshot,
     node: u64,
-    ids: *mut *const u64,
-    count: *mut usize,
+    list: *mut YggNodeList,
 ) -> YggStatus {
     guard("ygg_snapshot_node_children", || {
-        // SAFETY: the caller's contract for `ids` and `count`.
-        let (ids, count) = unsafe { (Out::new(ids, "ids")?, Out::new(count, "count")?) };
-        let view = view_arg(snapshot)?;
-        let children = view.children(node_arg(&view, node)?);
-        ids.write(if children.is_empty() {
-            std::ptr::null()
-        } else {
-            children.as_ptr().cast()
-        });
-        count.write(children.len());
-        Ok(())
+        // SAFETY: the caller's contract for `list`.
+        let out = unsafe { Out::new(list, "list") }?;
+        let found =
+            view_arg(snapshot).and_then(|view| Ok(view.children(node_arg(&view, node)?).collect()));
+        crate::query::deliver_ids(found, out)
     })
 }
 

@@ -64,7 +64,7 @@ impl Node {
     /// The children's ids, ascending.
     #[getter]
     fn children(&self, py: Python<'_>) -> PyResult<Vec<u64>> {
-        self.with(py, |v, n| v.children(n).iter().map(|c| c.0).collect())
+        self.with(py, |v, n| v.children(n).map(|c| c.0).collect())
     }
 
     /// The node's labels, sorted.

@@ -640,12 +640,13 @@ impl SceneGraph {
                 child_layer: c.layer,
             });
         }
-        let (pl, cl) = (p.layer, c.layer);
+        let cl = c.layer;
         let p = self.nodes.get_mut(&parent).expect("checked");
         let at = p.children.binary_search(&child).unwrap_or_else(|e| e);
         p.children.insert(at, child);
         self.nodes.get_mut(&child).expect("checked").parent = Some(parent);
-        self.touch_layer(pl, Change::Node(parent));
+        // Archived nesting lives on the child's side only (`LayerSegment::by_parent`):
+        // the parent's layer changes only if its box or a node index does (below).
         self.touch_layer(cl, Change::Node(child));
         self.subtree_joined(parent, child);
         self.index_nested(parent, child);
@@ -661,8 +662,6 @@ impl SceneGraph {
         let p = self.nodes.get_mut(&parent).expect("parent exists");
         let at = p.children.binary_search(&child).expect("mirrored nesting");
         p.children.remove(at);
-        let pl = p.layer;
-        self.touch_layer(pl, Change::Node(parent));
         self.touch_layer(cl, Change::Node(child));
         self.subtree_left(parent, child);
         self.index_unnested(parent, child);

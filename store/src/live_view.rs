@@ -83,8 +83,11 @@ impl SceneView for SceneGraph {
         node.parent
     }
 
-    fn children<'a>(&'a self, node: &'a Node) -> &'a [NodeId] {
-        &node.children
+    fn children<'a>(
+        &'a self,
+        node: &'a Node,
+    ) -> impl DoubleEndedIterator<Item = NodeId> + ExactSizeIterator + 'a {
+        node.children.iter().copied()
     }
 
     fn aabb<'a>(&'a self, node: &'a Node) -> Option<Aabb> {

@@ -64,7 +64,10 @@ pub trait SceneView {
     /// A node's parent.
     fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId>;
     /// A node's children, ascending by id.
-    fn children<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [NodeId];
+    fn children<'a>(
+        &'a self,
+        node: Self::NodeRef<'a>,
+    ) -> impl DoubleEndedIterator<Item = NodeId> + ExactSizeIterator + 'a;
     /// A node's bounding box, if enabled and its sub-tree has a point.
     fn aabb<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<Aabb>;
     /// Edges leaving a node, ascending by target id.
@@ -194,7 +197,10 @@ impl<V: SceneView + ?Sized> SceneView for &V {
     fn parent<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<NodeId> {
         (**self).parent(node)
     }
-    fn children<'a>(&'a self, node: Self::NodeRef<'a>) -> &'a [NodeId] {
+    fn children<'a>(
+        &'a self,
+        node: Self::NodeRef<'a>,
+    ) -> impl DoubleEndedIterator<Item = NodeId> + ExactSizeIterator + 'a {
         (**self).children(node)
     }
     fn aabb<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<Aabb> {

@@ -503,3 +503,35 @@ fn random_corruptions_of_tree_chunks_never_panic() {
         check_tree_chunked_cut(&cut, |trees| damage(&mut trees[0], rng))
     });
 }
+
+#[test]
+fn a_layer_whose_rows_by_parent_lie_is_refused_naming_what_is_wrong() {
+    let g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    let refused = |tamper: fn(&mut LayerSegment)| {
+        let mut s = g.layer_segment(objects);
+        tamper(&mut s);
+        validate_layer(&archive(&s), "objects")
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let intact = g.layer_segment(objects);
+    assert_eq!(intact.by_parent.len(), 15, "every object is nested");
+    assert!(validate_layer(&archive(&intact), "objects").is_ok());
+    let e = refused(|s| {
+        s.by_parent.pop();
+    });
+    assert!(
+        e.contains("by_parent lists 14 rows, 15 rows have a parent"),
+        "{e}"
+    );
+    let e = refused(|s| s.by_parent.swap(0, 5));
+    assert!(e.contains("not ascending by (parent, row)"), "{e}");
+    let e = refused(|s| s.by_parent[3] = 40);
+    assert!(e.contains("by_parent[3] = 40 is out of range"), "{e}");
+    let e = refused(|s| s.by_parent[1] = s.by_parent[0]);
+    assert!(e.contains("by_parent[1]"), "{e}");
+    let e = refused(|s| s.parents[0] = u64::MAX);
+    assert!(e.contains("15 rows, 14 rows have a parent"), "{e}");
+}

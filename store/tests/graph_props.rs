@@ -35,7 +35,7 @@ fn fingerprint<V: SceneView>(v: &V) -> String {
                 "  {id} pts {:?} parent {:?} children {:?} box {:?} labels {labels:?} features {features:?} out {out_edges:?} in {in_edges:?}\n",
                 v.points(n),
                 v.parent(n),
-                v.children(n),
+                v.children(n).collect::<Vec<_>>(),
                 v.aabb(n),
             );
         }
@@ -210,4 +210,54 @@ fn bounding_box_shrinks_when_the_extreme_point_moves_inward() {
     g.unnest(NodeId(2)).unwrap();
     assert_eq!(b(&g), None);
     g.check_invariants().unwrap();
+}
+
+/// Nesting lives on the child's side: nesting and unnesting change the child's layer
+/// only, and a node's children, spread over two layers below, come merged and ascending
+/// from the snapshot as from the live graph.
+#[test]
+fn nesting_changes_only_the_child_layer() {
+    let mut g = SceneGraph::new();
+    let places = g.add_layer("places").unwrap();
+    let poses = g.add_layer("poses").unwrap();
+    let objects = g.add_layer("objects").unwrap();
+    g.add_layer_edge(places, poses).unwrap();
+    g.add_layer_edge(places, objects).unwrap();
+    g.add_node(NodeId(1), places).unwrap();
+    g.add_node(NodeId(2), places).unwrap();
+    for (id, layer) in [
+        (10, poses),
+        (11, poses),
+        (12, poses),
+        (5, objects),
+        (20, objects),
+    ] {
+        g.add_node(NodeId(id), layer).unwrap();
+    }
+    let (places_before, poses_before) = (
+        g.layer_generation(places).unwrap(),
+        g.layer_generation(poses).unwrap(),
+    );
+    for (parent, child) in [(1, 11), (1, 20), (2, 12), (1, 5), (1, 10)] {
+        g.nest(NodeId(parent), NodeId(child)).unwrap();
+    }
+    assert_eq!(g.layer_generation(places).unwrap(), places_before);
+    assert!(g.layer_generation(poses).unwrap() > poses_before);
+    let ids = |v: Vec<NodeId>| v.into_iter().map(|n| n.0).collect::<Vec<_>>();
+    let snapshot = g.to_snapshot();
+    let view = snapshot.view();
+    for (parent, want) in [(1, vec![5, 10, 11, 20]), (2, vec![12]), (10, vec![])] {
+        assert_eq!(ids(query::children(&g, NodeId(parent))), want);
+        assert_eq!(ids(query::children(&view, NodeId(parent))), want);
+    }
+    let places_before = g.layer_generation(places).unwrap();
+    g.unnest(NodeId(10)).unwrap();
+    g.remove_node(NodeId(20)).unwrap();
+    assert_eq!(g.layer_generation(places).unwrap(), places_before);
+    let snapshot = g.to_snapshot();
+    assert_eq!(ids(query::children(&snapshot.view(), NodeId(1))), [5, 11]);
+    assert_eq!(
+        query::subtree(&snapshot.view(), NodeId(1)),
+        query::subtree(&g, NodeId(1))
+    );
 }

@@ -33,7 +33,7 @@ pub fn segment_fingerprint(s: &LayerSegment) -> String {
     };
     let tree = |t: &KdTree| archive(t).to_vec();
     format!(
-        "{} {} {} {:?}\nids {:?}\npoints {:?} {:?}\nparents {:?}\nchildren {:?} {:?}\n\
+        "{} {} {} {:?}\nids {:?}\npoints {:?} {:?}\nparents {:?}\nby parent {:?}\n\
          out {:?} {:?} {:?}\nin {:?} {:?} {:?}\nlabels {:?} {:?}\nfeatures {:?} {features:?}\n\
          boxes {:?} {:?}\nlabel index {:?}\nkey index {:?}\nlayer index {:?}\nnode indexes {:?}",
         s.version,
@@ -44,8 +44,7 @@ pub fn segment_fingerprint(s: &LayerSegment) -> String {
         s.point_offsets,
         s.points,
         s.parents,
-        s.child_offsets,
-        s.children,
+        s.by_parent,
         s.out_offsets,
         s.out_targets,
         strs(&s.out_descriptions),
@@ -83,9 +82,9 @@ pub fn manifest_fingerprint(m: &Manifest) -> String {
 }
 
 /// The content of one layer of any view, by name, in a canonical order: what its
-/// archived segment holds (every node's points, parent, children, box, labels,
-/// features, edges, node index members), with the layer name of every node a row
-/// refers to (a row naming a node that moved to another layer is rebuilt, so that
+/// archived segment holds (every node's points, parent, box, labels, features, edges,
+/// node index members; a node's children are the rows naming it as parent in the
+/// layers below), with the layer name of every node a row refers to (a row naming a node that moved to another layer is rebuilt, so that
 /// counts as a change). `with_dag` adds the names of the layer's DAG parents and
 /// children (which are not part of its segment).
 ///
@@ -116,7 +115,6 @@ pub fn layer_fingerprint<V: SceneView>(v: &V, layer: LayerId, with_dag: bool) ->
         features.sort_unstable();
         let out_edges: Vec<_> = v.out_edges(n).collect();
         let in_edges: Vec<_> = v.in_edges(n).collect();
-        let children: Vec<_> = v.children(n).iter().map(|&c| (c, layer_of(c))).collect();
         let index = v.node_index(id).is_some().then(|| {
             query::subtree(v, id)
                 .into_iter()
@@ -124,7 +122,7 @@ pub fn layer_fingerprint<V: SceneView>(v: &V, layer: LayerId, with_dag: bool) ->
                 .collect::<Vec<_>>()
         });
         out += &format!(
-            "  {id} pts {:?} parent {:?} children {children:?} box {:?} labels {labels:?} \
+            "  {id} pts {:?} parent {:?} box {:?} labels {labels:?} \
              features {features:?} out {out_edges:?} in {in_edges:?} index {index:?}\n",
             v.points(n),
             v.parent(n).map(|p| (p, layer_of(p))),

@@ -77,7 +77,7 @@ impl PlainGraph {
                 .map(|n| PlainNode {
                     id: view.node_id(n).0,
                     parent: view.parent(n).map(|p| p.0),
-                    children: view.children(n).iter().map(|c| c.0).collect(),
+                    children: view.children(n).map(|c| c.0).collect(),
                     points: view.points(n).to_vec(),
                     aabb: view.aabb(n).map(|b| [b.min, b.max]),
                     labels: view.labels(n).map(str::to_owned).collect(),

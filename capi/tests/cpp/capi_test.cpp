@@ -201,9 +201,13 @@ void snapshot_accessors_and_queries(const ygg_snapshot* s) {
   EXPECT(has && parent == 10);
   EXPECT_OK(ygg_snapshot_node_parent(s, 1, &has, &parent));
   EXPECT(!has);
-  const std::uint64_t* children = nullptr;
-  EXPECT_OK(ygg_snapshot_node_children(s, 1, &children, &n));
-  EXPECT(n == 2 && children[0] == 10 && children[1] == 11);
+  ygg_node_list children{nullptr, nullptr, 0};
+  EXPECT_OK(ygg_snapshot_node_children(s, 1, &children));
+  EXPECT(children.len == 2 && children.ids[0] == 10 && children.ids[1] == 11);
+  ygg_node_list_free(&children);
+  EXPECT_STATUS(ygg_snapshot_node_children(s, 999, &children), YGG_STATUS_NOT_FOUND);
+  EXPECT(children.len == 0);
+  EXPECT_STATUS(ygg_snapshot_node_children(s, 1, nullptr), YGG_STATUS_NULL_ARGUMENT);
   float box[6] = {};
   EXPECT_OK(ygg_snapshot_node_aabb(s, 1, &has, box));
   EXPECT(has && box[0] == 1.0f && box[3] == 3.0f && box[4] == 0.5f);

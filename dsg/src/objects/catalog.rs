@@ -161,7 +161,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
             for &layer in &object_layers {
                 for n in view.layer_nodes(layer).filter(|&n| keep(n)) {
                     kept.insert(view.node_id(n));
-                    let first_mesh = view.children(n).iter().find_map(|&c| {
+                    let first_mesh = view.children(n).find_map(|c| {
                         let l = view.node_layer(view.node(c)?);
                         mesh_layers.binary_search(&l).is_ok().then_some(l)
                     });
@@ -221,7 +221,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                     let all = view.aabb(n).is_none() || children.len() <= MAX_PART_CHILDREN;
                     let mut mesh: Vec<V::NodeRef<'a>> = Vec::new();
                     let mut only_mesh = true;
-                    for &c in children {
+                    for c in children {
                         let Some(c) = view.node(c) else {
                             only_mesh = false;
                             continue;
@@ -233,7 +233,7 @@ impl<'a, V: SceneView> Objects<'a, V> {
                         if all || mesh.is_empty() {
                             mesh.push(c);
                         }
-                        only_mesh &= view.children(c).is_empty();
+                        only_mesh &= view.children(c).len() == 0;
                     }
                     if mesh.is_empty() {
                         continue;

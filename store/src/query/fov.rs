@@ -329,7 +329,7 @@ pub fn visible<V: SceneView>(
         {
             out.push(id);
         }
-        stack.extend(view.children(n).iter().filter_map(|&ch| view.node(ch)));
+        stack.extend(view.children(n).filter_map(|ch| view.node(ch)));
     }
     out.sort_unstable();
     out.dedup();

@@ -515,7 +515,7 @@ pub fn nearest_in_subtree<V: SceneView>(
         if let Some(d2) = node_distance2(view, n, &c) {
             top.offer(d2, id);
         }
-        stack.extend(view.children(n).iter().filter_map(|&ch| view.node(ch)));
+        stack.extend(view.children(n).filter_map(|ch| view.node(ch)));
     }
     Ok(top.into_vec())
 }

@@ -45,7 +45,7 @@ pub fn parent<V: SceneView>(view: &V, node: NodeId) -> Option<NodeId> {
 /// ```
 pub fn children<V: SceneView>(view: &V, node: NodeId) -> Vec<NodeId> {
     view.node(node)
-        .map(|n| view.children(n).to_vec())
+        .map(|n| view.children(n).collect())
         .unwrap_or_default()
 }
 
@@ -93,7 +93,7 @@ pub(crate) fn visit_subtree<V: SceneView>(view: &V, root: NodeId, mut visit: imp
             continue; // only a damaged snapshot can nest a node twice
         }
         visit(id);
-        stack.extend(view.children(n).iter().rev().filter_map(|&c| view.node(c)));
+        stack.extend(view.children(n).rev().filter_map(|c| view.node(c)));
     }
 }
 

@@ -52,10 +52,9 @@ impl LayerSegment {
     }
 
     /// The CSR offset columns.
-    fn offset_columns_mut(&mut self) -> [&mut Vec<u32>; 6] {
+    fn offset_columns_mut(&mut self) -> [&mut Vec<u32>; 5] {
         [
             &mut self.point_offsets,
-            &mut self.child_offsets,
             &mut self.out_offsets,
             &mut self.in_offsets,
             &mut self.label_offsets,
@@ -155,6 +154,7 @@ impl SceneGraph {
         }
         s.ids = ids;
         s.rebuild_postings();
+        s.rebuild_by_parent();
         s.layer_index = self.archived_layer_index(layer, &s);
         s.node_indexes = self.archived_node_indexes(layer);
         (s, st)
@@ -187,8 +187,6 @@ impl SceneGraph {
     ) {
         let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
-        s.children.extend(n.children.iter().map(|c| c.0));
-        push_offset(&mut s.child_offsets, s.children.len());
         for &(t, d) in &n.out_edges {
             s.out_targets.push(row_of(t));
             s.out_descriptions.push(st.get(self, d, &mut s.strings));

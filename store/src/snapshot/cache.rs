@@ -7,10 +7,11 @@
 //! every remaining one, no index enabled or disabled — the next build looks up only the
 //! changed nodes: each changed row is overwritten in place where it keeps the length of
 //! a column (a node moved, a value changed) and spliced in where it does not (an edge or
-//! a child added), and new rows are appended; when many rows change length, fresh
+//! a label added), and new rows are appended; when many rows change length, fresh
 //! columns are built instead, copying each run of unchanged rows from the previous ones
 //! in one go. Label and key postings are rebuilt (a counting sort of the rows by term)
-//! only when labels or keys changed or rows were added or removed. The layer index is patched with the rows whose points changed and folded
+//! only when labels or keys changed or rows were added or removed; the rows whose parent
+//! changed are re-filed in `by_parent`. The layer index is patched with the rows whose points changed and folded
 //! into a new tree past a budget (`index_patch`), a node index is rebuilt only when its
 //! sub-tree changed. Otherwise (the journal overflowed, or starts elsewhere: another
 //! consumer took it) it builds from scratch like [`SceneGraph::layer_segment`].
@@ -26,7 +27,7 @@ use super::archive::StringTable;
 use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
-use super::schema::{LayerSegment, Manifest};
+use super::schema::{LayerSegment, Manifest, NO_PARENT};
 use crate::change::LayerChanges;
 use crate::{LayerId, NodeId, SceneGraph};
 use rustc_hash::FxHashMap;
@@ -331,6 +332,12 @@ fn patched(
     let mut ids = Vec::with_capacity(l.nodes.len());
     ids.extend_from_slice(&old.ids);
     ids.extend_from_slice(&appended);
+    // Each rewritten or appended row with the parent it had, to re-file `by_parent`.
+    let rewritten: Vec<(u32, u64)> = dirty_rows
+        .iter()
+        .map(|&row| (row as u32, old.parents[row]))
+        .chain((old_rows..ids.len()).map(|row| (row as u32, NO_PARENT)))
+        .collect();
     let point_changes = PointChanges::find(graph, &old, &dirty_rows, &ids, cut_points);
     let points_kept = chunks.changed.note_patch(graph, &old, &dirty_rows, &ids);
 
@@ -371,12 +378,14 @@ fn patched(
             copy_rows(&old, &mut s, clean_from..old_rows, &mut aabb_cursor);
             s.ids = ids;
             s.rebuild_postings();
+            s.by_parent = std::mem::take(&mut old.by_parent);
             s.layer_index = old.layer_index.take();
             s.node_indexes = std::mem::take(&mut old.node_indexes);
             s
         }
     };
 
+    s.refile_by_parent(&rewritten);
     if changes.geometry || s.layer_index.is_some() {
         chunks.tree_rebuilt |=
             update_layer_index(graph, layer, &mut s, point_changes, &mut index_killed);
@@ -401,15 +410,15 @@ fn patched(
     }))
 }
 
-/// Most rows whose column lengths change (an edge, a child or a label added) that one
+/// Most rows whose column lengths change (an edge or a label added) that one
 /// build splices into the columns in place; each splice moves the tails of the columns
 /// it changes and shifts the later offsets. Past it, fresh columns are built.
 const MAX_SPLICED: usize = 32;
 
 /// Rewrites the changed rows `dirty_rows` of `seg` in place: each row's entries are
 /// overwritten where they keep their length (a node moved, a value changed) and
-/// spliced in where they do not (an edge or child added: the odometry edge to the
-/// previous pose, a pose nested under a place). Returns whether the postings must be
+/// spliced in where they do not (an edge or label added: the odometry edge to the
+/// previous pose). Returns whether the postings must be
 /// rebuilt (labels or keys changed), or `None`, changing no row, when more than
 /// [`MAX_SPLICED`] rows change length. `ids` are the new sorted ids; `points_kept`, per
 /// dirty row, how many of its leading points are unchanged.
@@ -441,7 +450,6 @@ fn rows_in_place(
         .filter(|&(k, &row)| {
             [
                 (&seg.point_offsets, &fresh.point_offsets),
-                (&seg.child_offsets, &fresh.child_offsets),
                 (&seg.out_offsets, &fresh.out_offsets),
                 (&seg.in_offsets, &fresh.in_offsets),
                 (&seg.label_offsets, &fresh.label_offsets),
@@ -486,10 +494,6 @@ fn rows_in_place(
         let r = row_range(&seg.point_offsets, row);
         splice(&mut seg.points, r.start + kept..r.end, &points[kept..]);
         shift_offsets(&mut seg.point_offsets, row, r.len(), points.len());
-        let new = row_range(&fresh.child_offsets, k);
-        let r = row_range(&seg.child_offsets, row);
-        splice(&mut seg.children, r.clone(), &fresh.children[new.clone()]);
-        shift_offsets(&mut seg.child_offsets, row, r.len(), new.len());
         let new = row_range(&fresh.out_offsets, k);
         let r = row_range(&seg.out_offsets, row);
         splice(
@@ -576,7 +580,6 @@ impl LayerSegment {
             end
         }
         cut(&mut self.point_offsets, rows, &mut self.points);
-        cut(&mut self.child_offsets, rows, &mut self.children);
         let end = cut(&mut self.out_offsets, rows, &mut self.out_targets);
         self.out_descriptions.truncate(end);
         let end = cut(&mut self.in_offsets, rows, &mut self.in_sources);
@@ -586,6 +589,7 @@ impl LayerSegment {
         self.feature_kinds.truncate(end);
         self.feature_bits.truncate(end);
         self.parents.truncate(rows);
+        self.by_parent.retain(|&row| (row as usize) < rows);
         self.ids.truncate(rows);
         let boxes = self.aabb_rows.partition_point(|&r| (r as usize) < rows);
         self.aabb_rows.truncate(boxes);
@@ -605,8 +609,6 @@ fn copy_rows(
     if a < b {
         let r = copy_offsets(&mut new.point_offsets, &old.point_offsets, a, b);
         new.points.extend_from_slice(&old.points[r]);
-        let r = copy_offsets(&mut new.child_offsets, &old.child_offsets, a, b);
-        new.children.extend_from_slice(&old.children[r]);
         let r = copy_offsets(&mut new.out_offsets, &old.out_offsets, a, b);
         new.out_targets
             .extend_from_slice(&old.out_targets[r.clone()]);

@@ -3,8 +3,9 @@
 //!
 //! A snapshot is one **manifest** segment plus one **layer** segment per layer, and
 //! for a layer of many points its point column in **chunk** segments (`chunk`). A layer
-//! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids,
-//! children in CSR form, out- and in-edges in CSR form (rows within the layer), labels,
+//! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids
+//! and the rows ordered by parent (a node's children are found in its layer's DAG
+//! children, on the child's side), out- and in-edges in CSR form (rows within the layer), labels,
 //! features, sparse bounding boxes and the inverted label/key indexes, plus the layer's
 //! spatial indexes: its layer index and the node indexes rooted at its nodes, as kiddo's
 //! archived kd-trees (queried in place; their leaves are 128-byte aligned inside the
@@ -24,12 +25,13 @@
 //! A row is valid only within that layer generation.
 //!
 //! # Modules
-//! `schema` (the archived types), `archive` (archiving the live graph), `cache`
-//! (incremental segments for a publishing writer), `index_patch` (its patched layer
+//! `schema` (the archived types), `archive` (archiving the live graph), `by_parent`
+//! (the rows-by-parent column), `cache` (incremental segments for a publishing writer), `index_patch` (its patched layer
 //! indexes), `file` (`.ygg` files), `validate`
 //! (checking untrusted bytes), `view` ([`ArchivedScene`]).
 
 mod archive;
+mod by_parent;
 mod cache;
 mod chunk;
 mod chunk_state;

@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -40,10 +40,10 @@ pub struct LayerSegment {
     pub point_chunk_len: u32,
     /// Parent id of each row (`u64::MAX` for none).
     pub parents: Vec<u64>,
-    /// CSR offsets into `children`.
-    pub child_offsets: Vec<u32>,
-    /// Children ids (in other layers), ascending per row.
-    pub children: Vec<u64>,
+    /// Every row that has a parent, ascending by (parent id, row): the children a node
+    /// has in this layer are one run of it. Nesting is kept on the child's side only, so
+    /// nesting a node republishes the child's layer, not the parent's.
+    pub by_parent: Vec<u32>,
     /// CSR offsets into `out_targets` / `out_descriptions`.
     pub out_offsets: Vec<u32>,
     /// Target rows of out-edges, ascending by target id per row.

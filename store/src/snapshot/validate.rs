@@ -10,7 +10,7 @@
 use super::chunk::{MAX_POINT_CHUNK_LEN, check_chunk_refs, check_tree_chunk, chunk_error};
 use super::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, FORMAT_VERSION,
-    u32s, u64s,
+    NO_PARENT, u32s, u64s,
 };
 use crate::SnapshotError;
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
@@ -169,6 +169,43 @@ fn check_below(name: &str, values: &[u32], bound: usize) -> Result<(), String> {
     ))
 }
 
+/// Checks that `by_parent` lists exactly the rows with a parent, ascending by (parent
+/// id, row): each entry below the row count, each row's parent set, each key above the
+/// one before (so no row twice), and as many entries as rows with a parent.
+fn check_by_parent(parents: &[u64], by_parent: &[u32]) -> Result<(), String> {
+    let nested = parents.iter().filter(|&&p| p != NO_PARENT).count();
+    if by_parent.len() != nested {
+        return Err(format!(
+            "by_parent lists {} rows, {nested} rows have a parent",
+            by_parent.len()
+        ));
+    }
+    let mut previous = None;
+    for (i, &row) in by_parent.iter().enumerate() {
+        let parent = match parents.get(row as usize) {
+            Some(&p) if p != NO_PARENT => p,
+            Some(_) => {
+                return Err(format!(
+                    "by_parent[{i}] = {row} names a row without a parent"
+                ));
+            }
+            None => {
+                return Err(format!(
+                    "by_parent[{i}] = {row} is out of range (< {})",
+                    parents.len()
+                ));
+            }
+        };
+        if previous.is_some_and(|p| p >= (parent, row)) {
+            return Err(format!(
+                "by_parent[{i}] = {row} is not ascending by (parent, row)"
+            ));
+        }
+        previous = Some((parent, row));
+    }
+    Ok(())
+}
+
 /// The consistency pass run once per validated layer segment: everything an accessor
 /// indexes is in range. Linear in the number of rows, edges, labels and features; the
 /// point column itself is not scanned.
@@ -196,12 +233,7 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
     if l.parents.len() != rows {
         return Err("parents column length differs from ids".into());
     }
-    check_offsets(
-        "child_offsets",
-        u32s(&l.child_offsets),
-        rows,
-        l.children.len(),
-    )?;
+    check_by_parent(u64s(&l.parents), u32s(&l.by_parent))?;
     check_offsets(
         "out_offsets",
         u32s(&l.out_offsets),

@@ -34,6 +34,59 @@ pub struct ArchivedScene<'a> {
     index_trees: Vec<(u32, &'a ArchivedKdTree)>,
 }
 
+/// A node's children in an [`ArchivedScene`], ascending by id.
+enum ArchivedChildren<'a> {
+    /// Children in one layer: a run of its `by_parent` (rows, hence ids, ascending).
+    Run {
+        ids: &'a [u64],
+        rows: std::slice::Iter<'a, u32>,
+    },
+    /// Children in several layers, merged.
+    Merged(std::vec::IntoIter<NodeId>),
+}
+
+impl Iterator for ArchivedChildren<'_> {
+    type Item = NodeId;
+
+    fn next(&mut self) -> Option<NodeId> {
+        match self {
+            ArchivedChildren::Run { ids, rows } => rows.next().map(|&r| NodeId(ids[r as usize])),
+            ArchivedChildren::Merged(ids) => ids.next(),
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        match self {
+            ArchivedChildren::Run { rows, .. } => rows.size_hint(),
+            ArchivedChildren::Merged(ids) => ids.size_hint(),
+        }
+    }
+}
+
+impl DoubleEndedIterator for ArchivedChildren<'_> {
+    fn next_back(&mut self) -> Option<NodeId> {
+        match self {
+            ArchivedChildren::Run { ids, rows } => {
+                rows.next_back().map(|&r| NodeId(ids[r as usize]))
+            }
+            ArchivedChildren::Merged(ids) => ids.next_back(),
+        }
+    }
+}
+
+impl ExactSizeIterator for ArchivedChildren<'_> {}
+
+/// The rows of `seg` nested under `parent`: one run of its `by_parent`, found by binary
+/// search (the validated column is sorted by parent; a row out of range sorts last).
+fn rows_under(seg: &ArchivedLayerSegment, parent: u64) -> &[u32] {
+    let parents = u64s(&seg.parents);
+    let by_parent = u32s(&seg.by_parent);
+    let key = |r: &u32| parents.get(*r as usize).copied().unwrap_or(u64::MAX);
+    let start = by_parent.partition_point(|r| key(r) < parent);
+    let len = by_parent[start..].partition_point(|r| key(r) <= parent);
+    &by_parent[start..start + len]
+}
+
 /// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ArchivedNodeRef {
@@ -350,10 +403,43 @@ impl SceneView for ArchivedScene<'_> {
         (p != NO_PARENT).then_some(NodeId(p))
     }
 
-    fn children(&self, n: ArchivedNodeRef) -> &[NodeId] {
-        let seg = self.seg(n);
-        let children: &[NodeId] = bytemuck::cast_slice(seg.children.as_slice());
-        &children[Self::range(&seg.child_offsets, n.row)]
+    fn children(
+        &self,
+        n: ArchivedNodeRef,
+    ) -> impl DoubleEndedIterator<Item = NodeId> + ExactSizeIterator + '_ {
+        let parent = u64s(&self.seg(n).ids)[n.row as usize];
+        // Nesting follows the DAG, so the children lie in the layer's DAG children;
+        // usually in one of them (no copy), else merged.
+        let mut run: Option<(&[u64], &[u32])> = None;
+        let mut merged = Vec::new();
+        for &child_layer in u32s(&self.manifest.layers[n.layer as usize].children) {
+            let Some((_, seg)) = self.segment(LayerId(child_layer)) else {
+                continue;
+            };
+            let rows = rows_under(seg, parent);
+            if rows.is_empty() {
+                continue;
+            }
+            let ids = u64s(&seg.ids);
+            if run.is_none() && merged.is_empty() {
+                run = Some((ids, rows));
+                continue;
+            }
+            if let Some((first_ids, first_rows)) = run.take() {
+                merged.extend(first_rows.iter().map(|&r| NodeId(first_ids[r as usize])));
+            }
+            merged.extend(rows.iter().map(|&r| NodeId(ids[r as usize])));
+        }
+        if merged.is_empty() {
+            let (ids, rows) = run.unwrap_or((&[], &[]));
+            ArchivedChildren::Run {
+                ids,
+                rows: rows.iter(),
+            }
+        } else {
+            merged.sort_unstable();
+            ArchivedChildren::Merged(merged.into_iter())
+        }
     }
 
     fn aabb(&self, n: ArchivedNodeRef) -> Option<Aabb> {
