@@ -17,6 +17,7 @@ use crate::change::{Change, LayerChanges};
 use crate::error::{EditResult, GraphEditError};
 use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
 use crate::index::LiveIndexes;
+use crate::touch_log::{TouchLog, TouchMark};
 use crate::{Aabb, LayerId, NodeId, Point};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::BTreeMap;
@@ -98,6 +99,8 @@ pub struct SceneGraph {
     pub(crate) terms_generation: u64,
     /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
     pub(crate) indexes: LiveIndexes,
+    /// Which layers changed when, for [`SceneGraph::layers_touched_since`].
+    touches: TouchLog,
 }
 
 /// Which inverted index a posting belongs to.
@@ -116,6 +119,11 @@ impl SceneGraph {
     /// Number of nodes in the whole graph.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Number of layers.
+    pub fn layer_count(&self) -> usize {
+        self.layers.len()
     }
 
     /// The generation of a layer: it increases whenever the layer's content changes.
@@ -139,7 +147,21 @@ impl SceneGraph {
     pub(crate) fn touch_layer(&mut self, layer: LayerId, change: Change) {
         if let Some(l) = self.layers.get_mut(&layer) {
             l.touch(change);
+            self.touches.touch(layer);
         }
+    }
+
+    /// A point after every change made so far, for [`SceneGraph::layers_touched_since`].
+    pub fn touch_mark(&self) -> TouchMark {
+        self.touches.mark()
+    }
+
+    /// The layers whose generation changed after `mark` (or that were added after it),
+    /// ascending; removed layers are not listed. O(changes since the mark, amortised),
+    /// whatever the number of layers: how a publisher finds what to send. `None` when
+    /// `mark` is not this graph's (a mark of another graph, or taken before a clone).
+    pub fn layers_touched_since(&self, mark: TouchMark) -> Option<Vec<LayerId>> {
+        self.touches.touched_since(mark)
     }
 
     /// The change journal of `layer` (which exists), replaced by an empty one starting
@@ -183,6 +205,7 @@ impl SceneGraph {
         self.layer_names.insert(name.to_owned(), id);
         self.next_layer = self.next_layer.max(id.0 + 1);
         self.structure_generation += 1;
+        self.touches.touch(id);
     }
 
     /// The id of the layer named `name`.
@@ -222,6 +245,7 @@ impl SceneGraph {
         let layer = self.layers.remove(&id).expect("checked above");
         self.layer_names.remove(&layer.name);
         self.structure_generation += 1;
+        self.touches.forget(id);
         Ok(())
     }
 
@@ -331,6 +355,7 @@ impl SceneGraph {
         let slot = l.nodes.len() as u32;
         l.nodes.push(id);
         l.touch(Change::Node(id));
+        self.touches.touch(layer);
         entry.insert(Node {
             id,
             layer,
@@ -390,6 +415,7 @@ impl SceneGraph {
             id,
             had_points: !node.points.is_empty(),
         });
+        self.touches.touch(node.layer);
         self.index_node_removed(&node);
         Ok(())
     }

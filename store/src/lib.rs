@@ -28,6 +28,7 @@ mod points;
 pub mod query;
 pub mod snapshot;
 mod sync;
+mod touch_log;
 mod view;
 
 pub use error::{EditResult, GraphEditError, SnapshotError};
@@ -38,4 +39,5 @@ pub use points::{Points, PointsIter};
 pub use query::Scope;
 pub use snapshot::{ArchivedScene, SnapshotFile};
 pub use sync::SyncReport;
+pub use touch_log::TouchMark;
 pub use view::{EdgeRef, SceneView};

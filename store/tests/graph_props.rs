@@ -6,6 +6,7 @@ mod common;
 
 use common::{LABELS, apply, op, seeded_graph};
 use proptest::prelude::*;
+use std::collections::BTreeMap;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::SegmentCache;
 use ygg_store::{FeatureRef, NodeId, SceneGraph, SceneView, Scope};
@@ -152,16 +153,30 @@ proptest! {
     ) {
         let mut g = seeded_graph(seed);
         let mut cache = SegmentCache::new();
+        let mut mark = g.touch_mark();
+        let mut generations: BTreeMap<_, _> =
+            g.layers().map(|l| (l, g.layer_generation(l))).collect();
         for (i, op) in ops.iter().enumerate() {
             let _ = apply(&mut g, op);
             if i % publish_every == 0 {
+                // The touch log names every layer whose generation changed (or that is new).
+                let touched = g.layers_touched_since(mark).expect("the graph's own mark");
+                for l in g.layers() {
+                    let generation = g.layer_generation(l);
+                    if generations.get(&l) != Some(&generation) {
+                        prop_assert!(touched.contains(&l), "layer {} changed, not listed", l);
+                    }
+                    generations.insert(l, generation);
+                }
+                mark = g.touch_mark();
                 for l in g.layers().collect::<Vec<_>>() {
                     let fresh = segment_fingerprint(&g.layer_segment(l));
                     let cached = segment_fingerprint(cache.layer_segment(&mut g, l));
                     prop_assert_eq!(cached, fresh, "layer {} after op {} ({:?})", l, i, op);
                 }
                 let fresh = g.manifest(i as u64);
-                let (cached, len) = cache.manifest_with_len(&g, i as u64);
+                // Only the touched layers' entries are refreshed when the structure held.
+                let (cached, len) = cache.manifest_with_len(&g, i as u64, Some(&touched));
                 prop_assert_eq!(manifest_fingerprint(cached), manifest_fingerprint(&fresh));
                 // The kept archived length is the one a fresh manifest archives to.
                 prop_assert_eq!(len, fresh.archived_len());

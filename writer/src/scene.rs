@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::time::Duration;
 use ygg_store::snapshot::{MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentCache};
-use ygg_store::{LayerId, SceneGraph, SceneView, SnapshotError};
+use ygg_store::{LayerId, SceneGraph, SceneView, SnapshotError, TouchMark};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
 
@@ -46,7 +46,20 @@ pub struct SceneWriter {
     publisher: SegmentPublisher,
     /// Ids of the segments (layers and point chunks) of the last published cut.
     published_segments: BTreeSet<u32>,
+    /// What the last successful publish left for the next one to patch.
+    last_cut: Option<LastCut>,
     generation: u64,
+}
+
+/// The last published cut, as the next publish patches it when the graph's structure
+/// held.
+struct LastCut {
+    /// The graph's structure generation it was published at.
+    structure: u64,
+    /// The graph's touch mark taken as it began: layers touched since may have changed.
+    mark: TouchMark,
+    /// Its manifest entries, ascending by segment id.
+    entries: Vec<ManifestEntry>,
 }
 
 /// Configures and creates a [`SceneWriter`]; see [`SceneWriter::builder`].
@@ -146,6 +159,7 @@ impl SceneWriterBuilder {
             segments: SegmentCache::with_point_chunk_len(self.point_chunk_len),
             publisher: self.publisher.max_segments(max_layers).create()?,
             published_segments: BTreeSet::new(),
+            last_cut: None,
             generation: 0,
         })
     }
@@ -201,32 +215,48 @@ impl SceneWriter {
     /// transport errors. On error the previous snapshot stays
     /// the current one for readers.
     pub fn publish(&mut self) -> Result<PublishReport, PublishError> {
-        let layers: Vec<_> = self.graph.layers().collect();
-        if let Some(layer) = layers.iter().find(|l| l.0 > MAX_LAYER_ID) {
-            return Err(PublishError::LayerIdTooLarge {
-                layer_id: layer.0,
-                max: MAX_LAYER_ID,
-            });
-        }
+        let structure = self.graph.structure_generation();
+        let mark = self.graph.touch_mark();
+        // With the structure unchanged since the last cut, the touch log names the
+        // changed layers and the last cut's entries are patched: O(changed), not
+        // O(layers). Otherwise (first publish, a layer or DAG edge added or removed, the
+        // last publish failed) every layer is looked at. Taken out, so that a failed
+        // publish leaves none and the next one looks at every layer.
+        let last = self.last_cut.take().filter(|c| c.structure == structure);
+        let touched = last
+            .as_ref()
+            .and_then(|c| self.graph.layers_touched_since(c.mark));
+        let incremental = touched.is_some();
+        let candidates = match touched {
+            Some(touched) => touched,
+            None => {
+                let layers: Vec<_> = self.graph.layers().collect();
+                if let Some(layer) = layers.iter().find(|l| l.0 > MAX_LAYER_ID) {
+                    return Err(PublishError::LayerIdTooLarge {
+                        layer_id: layer.0,
+                        max: MAX_LAYER_ID,
+                    });
+                }
+                layers
+            }
+        };
+        let changed: Vec<LayerId> = candidates
+            .into_iter()
+            .filter(|l| self.publisher.layer_generation(l.0) != self.graph.layer_generation(*l))
+            .collect();
         // Changed layers are brought up to date first, so that the cut's segments are
         // counted (a layer's point chunks may have grown) before any goes out.
-        let changed: Vec<_> = layers
-            .iter()
-            .filter(|l| {
-                let generation = self.graph.layer_generation(**l).expect("listed layer");
-                self.publisher.layer_generation(l.0) != Some(generation)
-            })
-            .copied()
-            .collect();
+        let mut reshaped = false;
         for layer in &changed {
-            self.segments.published_layer(&mut self.graph, *layer);
+            let before = self.segments.published(*layer).map(|p| p.chunk_shape());
+            let after = self
+                .segments
+                .published_layer(&mut self.graph, *layer)
+                .chunk_shape();
+            reshaped |= before != Some(after);
         }
-        let chunks = |l: &LayerId| {
-            self.segments.published(*l).map_or(0, |p| {
-                p.segment.point_chunks.len() + usize::from(p.tree_chunk().is_some())
-            })
-        };
-        let segments = layers.len() + layers.iter().map(chunks).sum::<usize>();
+        let layer_count = self.graph.layer_count();
+        let segments = layer_count + self.segments.chunk_segments();
         if segments > self.max_layers() {
             // Refused before any segment goes out, so readers see nothing of this cut.
             return Err(PublishError::TooManyLayers {
@@ -235,56 +265,111 @@ impl SceneWriter {
             });
         }
         self.publisher.start_cut();
-        let mut report = PublishReport::default();
-        let mut entries = Vec::with_capacity(segments);
-        for layer in &layers {
+        let mut report = PublishReport {
+            layers_unchanged: layer_count - changed.len(),
+            ..PublishReport::default()
+        };
+        for layer in &changed {
             let generation = self.graph.layer_generation(*layer).expect("listed layer");
-            if changed.binary_search(layer).is_ok() {
-                let published = self.segments.published(*layer).expect("brought up to date");
-                let len = published.segment.archived_len();
-                self.publisher
-                    .try_publish_layer(layer.0, generation, len, |buf| {
-                        published.segment.archive_into(buf).map(|_| ())
-                    })?;
-                report.layers_sent += 1;
-                report.bytes_sent += len;
-                for (index, (id, chunk_generation)) in published.chunks().enumerate() {
-                    if self.publisher.layer_generation(id) != Some(chunk_generation) {
-                        let chunk = published.chunk(index);
-                        let len = chunk.archived_len();
-                        send_chunk(
-                            &mut self.publisher,
-                            &mut report,
-                            id,
-                            chunk_generation,
-                            len,
-                            |buf| chunk.archive_into(buf),
-                        )?;
-                    }
-                }
-                if let Some((id, tree_generation, chunk)) = published.tree_chunk()
-                    && self.publisher.layer_generation(id) != Some(tree_generation)
-                {
+            let published = self.segments.published(*layer).expect("brought up to date");
+            let len = published.segment.archived_len();
+            self.publisher
+                .try_publish_layer(layer.0, generation, len, |buf| {
+                    published.segment.archive_into(buf).map(|_| ())
+                })?;
+            report.layers_sent += 1;
+            report.bytes_sent += len;
+            for (index, (id, chunk_generation)) in published.chunks().enumerate() {
+                if self.publisher.layer_generation(id) != Some(chunk_generation) {
+                    let chunk = published.chunk(index);
                     let len = chunk.archived_len();
                     send_chunk(
                         &mut self.publisher,
                         &mut report,
                         id,
-                        tree_generation,
+                        chunk_generation,
                         len,
                         |buf| chunk.archive_into(buf),
                     )?;
                 }
-            } else {
-                report.layers_unchanged += 1;
             }
-            entries.push(ManifestEntry {
-                layer_id: layer.0,
-                generation,
-            });
+            if let Some((id, tree_generation, chunk)) = published.tree_chunk()
+                && self.publisher.layer_generation(id) != Some(tree_generation)
+            {
+                let len = chunk.archived_len();
+                send_chunk(
+                    &mut self.publisher,
+                    &mut report,
+                    id,
+                    tree_generation,
+                    len,
+                    |buf| chunk.archive_into(buf),
+                )?;
+            }
         }
-        // Chunk ids sort after every layer id: point chunks by layer, each layer's in
-        // column order, then tree chunks by layer.
+        let entries = match last {
+            Some(mut cut) if !reshaped => {
+                self.patch_entries(&mut cut.entries, &changed);
+                cut.entries
+            }
+            _ => self.cut_entries(),
+        };
+        let generation = self.generation + 1;
+        let (manifest, len) = self.segments.manifest_with_len(
+            &self.graph,
+            generation,
+            incremental.then_some(changed.as_slice()),
+        );
+        self.publisher
+            .try_publish_manifest(generation, &entries, len, |buf| {
+                manifest.archive_into(buf).map(|_| ())
+            })?;
+        self.generation = generation;
+        report.generation = generation;
+        report.bytes_sent += len;
+        self.last_cut = Some(LastCut {
+            structure,
+            mark,
+            entries,
+        });
+        Ok(report)
+    }
+
+    /// Sets the generations of the changed layers and their chunks in the last cut's
+    /// entries (ascending by segment id; the layers' chunk shapes are unchanged).
+    fn patch_entries(&self, entries: &mut [ManifestEntry], changed: &[LayerId]) {
+        let mut set = |id: u32, generation: u64| {
+            if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
+                entries[i].generation = generation;
+            }
+        };
+        for layer in changed {
+            set(
+                layer.0,
+                self.graph.layer_generation(*layer).expect("listed layer"),
+            );
+            let published = self.segments.published(*layer).expect("brought up to date");
+            for (id, generation) in published.chunks() {
+                set(id, generation);
+            }
+            if let Some((id, generation, _)) = published.tree_chunk() {
+                set(id, generation);
+            }
+        }
+    }
+
+    /// The entries of the cut, built afresh from every layer (ascending by segment id:
+    /// layers, then point chunks by layer in column order, then tree chunks by layer),
+    /// retiring the ids of the last cut that are gone.
+    fn cut_entries(&mut self) -> Vec<ManifestEntry> {
+        let layers: Vec<_> = self.graph.layers().collect();
+        let mut entries: Vec<ManifestEntry> = layers
+            .iter()
+            .map(|l| ManifestEntry {
+                layer_id: l.0,
+                generation: self.graph.layer_generation(*l).expect("listed layer"),
+            })
+            .collect();
         for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
             entries.extend(
                 published
@@ -310,16 +395,7 @@ impl SceneWriter {
             self.publisher.retire_layer(*gone);
         }
         self.published_segments = live;
-        let generation = self.generation + 1;
-        let (manifest, len) = self.segments.manifest_with_len(&self.graph, generation);
-        self.publisher
-            .try_publish_manifest(generation, &entries, len, |buf| {
-                manifest.archive_into(buf).map(|_| ())
-            })?;
-        self.generation = generation;
-        report.generation = generation;
-        report.bytes_sent += len;
-        Ok(report)
+        entries
     }
 }
 

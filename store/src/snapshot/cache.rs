@@ -27,8 +27,9 @@ use super::archive::StringTable;
 use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
-use super::schema::{LayerSegment, Manifest, NO_PARENT};
+use super::schema::{LayerSegment, Manifest, ManifestLayer, NO_PARENT};
 use crate::change::LayerChanges;
+use crate::graph::Layer;
 use crate::{LayerId, NodeId, SceneGraph};
 use rustc_hash::FxHashMap;
 use std::ops::Range;
@@ -62,6 +63,8 @@ pub struct SegmentCache {
     /// The last manifest, the graph's structure and terms generations it was built at, and
     /// its archived length once asked for ([`SegmentCache::manifest_with_len`]).
     manifest: Option<CachedManifest>,
+    /// Chunk segments (point and tree chunks) of every layer in published form.
+    chunk_segments: usize,
 }
 
 impl std::fmt::Debug for SegmentCache {
@@ -104,6 +107,7 @@ impl Default for SegmentCache {
             point_chunk_len: POINT_CHUNK_LEN,
             tree_chunk_min_points: TREE_CHUNK_MIN_POINTS,
             manifest: None,
+            chunk_segments: 0,
         }
     }
 }
@@ -164,7 +168,16 @@ impl SegmentCache {
         cached
             .chunks
             .publish_form(&mut cached.segment, chunk_len, tree_min);
+        let chunks = published_chunks(cached);
+        self.chunk_segments += chunks;
+        let cached = &self.layers[&layer];
         PublishedLayer::new(&cached.segment, &cached.chunks)
+    }
+
+    /// The chunk segments (point and tree chunks) the layers in published form send
+    /// beside their layer segments, in O(1): with the layer count, the size of a cut.
+    pub fn chunk_segments(&self) -> usize {
+        self.chunk_segments
     }
 
     /// The layer as the last [`SegmentCache::published_layer`] left it (`None` if this
@@ -180,10 +193,11 @@ impl SegmentCache {
     fn update(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &mut Cached {
         let l = &graph.layers[&layer];
         let (generation, incarnation) = (l.generation, l.incarnation);
-        let mut cached = self
-            .layers
-            .remove(&layer)
-            .filter(|c| c.incarnation == incarnation);
+        let removed = self.layers.remove(&layer);
+        if let Some(c) = removed.as_deref() {
+            self.chunk_segments -= published_chunks(c);
+        }
+        let mut cached = removed.filter(|c| c.incarnation == incarnation);
         if let Some(c) = cached.as_mut() {
             let Cached {
                 segment, chunks, ..
@@ -209,54 +223,96 @@ impl SegmentCache {
     /// per-layer generations, node counts and id bounds are brought up to date (the id
     /// bounds from this cache's segments where they are current).
     pub fn manifest(&mut self, graph: &SceneGraph, generation: u64) -> &Manifest {
-        &self.update_manifest(graph, generation).manifest
+        &self.update_manifest(graph, generation, None).manifest
     }
 
     /// [`SegmentCache::manifest`] with its archived length ([`Manifest::archived_len`]),
     /// which is sized only when the structure or the terms changed: a publish archives the
     /// manifest once, not twice.
-    pub fn manifest_with_len(&mut self, graph: &SceneGraph, generation: u64) -> (&Manifest, usize) {
-        let cached = self.update_manifest(graph, generation);
+    ///
+    /// `changed`, if given, lists every layer whose generation changed since the last
+    /// call: with the structure and terms unchanged, only their entries are brought up to
+    /// date (O(changed), not O(layers)).
+    pub fn manifest_with_len(
+        &mut self,
+        graph: &SceneGraph,
+        generation: u64,
+        changed: Option<&[LayerId]>,
+    ) -> (&Manifest, usize) {
+        let cached = self.update_manifest(graph, generation, changed);
         let len = *cached
             .archived_len
             .get_or_insert_with(|| cached.manifest.archived_len());
         (&cached.manifest, len)
     }
 
-    fn update_manifest(&mut self, graph: &SceneGraph, generation: u64) -> &mut CachedManifest {
+    fn update_manifest(
+        &mut self,
+        graph: &SceneGraph,
+        generation: u64,
+        changed: Option<&[LayerId]>,
+    ) -> &mut CachedManifest {
         let key = (graph.structure_generation, graph.terms_generation);
-        self.layers.retain(|id, _| graph.layers.contains_key(id));
         let cached = match self.manifest.take() {
             Some(mut c) if (c.structure_generation, c.terms_generation) == key => {
                 let m = &mut c.manifest;
-                for (entry, (id, l)) in m.layers.iter_mut().zip(&graph.layers) {
-                    entry.generation = l.generation;
-                    entry.node_count = l.nodes.len() as u64;
-                    (entry.min_id, entry.max_id) = match self.layers.get(id) {
-                        Some(c)
-                            if c.segment.generation == l.generation
-                                && c.incarnation == l.incarnation =>
-                        {
-                            (
-                                c.segment.ids.first().copied().unwrap_or(u64::MAX),
-                                c.segment.ids.last().copied().unwrap_or(0),
-                            )
+                match changed {
+                    Some(changed) => {
+                        for id in changed {
+                            if let Ok(i) = m.layers.binary_search_by_key(&id.0, |e| e.id) {
+                                refresh_entry(&mut m.layers[i], &self.layers, &graph.layers[id]);
+                            }
                         }
-                        _ => l.id_bounds(),
-                    };
+                    }
+                    // The same layers as when it was built, both ascending by id.
+                    None => {
+                        for (entry, l) in m.layers.iter_mut().zip(graph.layers.values()) {
+                            refresh_entry(entry, &self.layers, l);
+                        }
+                    }
                 }
                 m.generation = generation;
                 c
             }
-            _ => CachedManifest {
-                structure_generation: key.0,
-                terms_generation: key.1,
-                manifest: graph.manifest(generation),
-                archived_len: None,
-            },
+            _ => {
+                let chunk_segments = &mut self.chunk_segments;
+                self.layers.retain(|id, c| {
+                    let kept = graph.layers.contains_key(id);
+                    if !kept {
+                        *chunk_segments -= published_chunks(c);
+                    }
+                    kept
+                });
+                CachedManifest {
+                    structure_generation: key.0,
+                    terms_generation: key.1,
+                    manifest: graph.manifest(generation),
+                    archived_len: None,
+                }
+            }
         };
         self.manifest.insert(cached)
     }
+}
+
+/// Brings a manifest entry up to date with its live layer `l`: generation, node count and
+/// id bounds (from the cached segment when it is current).
+fn refresh_entry(entry: &mut ManifestLayer, cache: &FxHashMap<LayerId, Box<Cached>>, l: &Layer) {
+    entry.generation = l.generation;
+    entry.node_count = l.nodes.len() as u64;
+    (entry.min_id, entry.max_id) = match cache.get(&LayerId(entry.id)) {
+        Some(c) if c.segment.generation == l.generation && c.incarnation == l.incarnation => (
+            c.segment.ids.first().copied().unwrap_or(u64::MAX),
+            c.segment.ids.last().copied().unwrap_or(0),
+        ),
+        _ => l.id_bounds(),
+    };
+}
+
+/// The chunk segments a cached layer publishes (none unless it is in published form).
+fn published_chunks(c: &Cached) -> usize {
+    let (points, tree) = PublishedLayer::new(&c.segment, &c.chunks).chunk_shape();
+    points + usize::from(tree)
 }
 
 fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {

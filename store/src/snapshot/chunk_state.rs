@@ -264,6 +264,20 @@ impl<'c> PublishedLayer<'c> {
         ))
     }
 
+    /// The chunk segments the layer publishes beside its layer segment: its point chunks
+    /// and whether its index's base tree travels as a tree chunk. Equal shapes mean
+    /// the same segment ids.
+    pub fn chunk_shape(&self) -> (usize, bool) {
+        (
+            self.segment.point_chunks.len(),
+            self.segment
+                .layer_index
+                .as_ref()
+                .is_some_and(|i| i.tree_chunk.is_some())
+                && self.tree.is_some(),
+        )
+    }
+
     /// The layer's point chunks: `(segment id, generation)` each, in column order (none
     /// for a layer published in one piece).
     pub fn chunks(&self) -> impl Iterator<Item = (u32, u64)> + 'c {
