@@ -8,7 +8,7 @@ use common::{LABELS, apply, op, seeded_graph};
 use proptest::prelude::*;
 use std::collections::BTreeMap;
 use ygg_store::query::{self, Direction};
-use ygg_store::snapshot::SegmentCache;
+use ygg_store::snapshot::{SegmentCache, archive};
 use ygg_store::{FeatureRef, NodeId, SceneGraph, SceneView, Scope};
 use ygg_testkit::fingerprint::{manifest_fingerprint, segment_fingerprint};
 
@@ -175,11 +175,13 @@ proptest! {
                     prop_assert_eq!(cached, fresh, "layer {} after op {} ({:?})", l, i, op);
                 }
                 let fresh = g.manifest(i as u64);
-                // Only the touched layers' entries are refreshed when the structure held.
-                let (cached, len) = cache.manifest_with_len(&g, i as u64, Some(&touched));
+                // Only the touched layers' entries are refreshed when the structure held,
+                // and the kept bytes are patched: they equal the manifest archived anew.
+                let bytes = cache.manifest_bytes(&g, i as u64, Some(&touched)).to_vec();
+                let cached = cache.manifest(&g, i as u64);
                 prop_assert_eq!(manifest_fingerprint(cached), manifest_fingerprint(&fresh));
-                // The kept archived length is the one a fresh manifest archives to.
-                prop_assert_eq!(len, fresh.archived_len());
+                prop_assert_eq!(&bytes[..], &archive(cached)[..]);
+                prop_assert_eq!(bytes.len(), fresh.archived_len());
             }
         }
     }

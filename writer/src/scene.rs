@@ -315,14 +315,16 @@ impl SceneWriter {
             _ => self.cut_entries(),
         };
         let generation = self.generation + 1;
-        let (manifest, len) = self.segments.manifest_with_len(
+        let manifest = self.segments.manifest_bytes(
             &self.graph,
             generation,
             incremental.then_some(changed.as_slice()),
         );
+        let len = manifest.len();
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {
-                manifest.archive_into(buf).map(|_| ())
+                buf[..len].copy_from_slice(manifest);
+                Ok::<(), SnapshotError>(())
             })?;
         self.generation = generation;
         report.generation = generation;

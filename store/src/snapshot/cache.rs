@@ -27,7 +27,8 @@ use super::archive::StringTable;
 use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
-use super::schema::{LayerSegment, Manifest, ManifestLayer, NO_PARENT};
+use super::schema::{ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT};
+use crate::bytes::{SegmentBytes, archive};
 use crate::change::LayerChanges;
 use crate::graph::Layer;
 use crate::{LayerId, NodeId, SceneGraph};
@@ -81,9 +82,63 @@ struct CachedManifest {
     structure_generation: u64,
     terms_generation: u64,
     manifest: Manifest,
-    /// The manifest's archived length: it changes only with the structure or the terms
-    /// (every other field has a fixed archived size), so it is kept across generations.
-    archived_len: Option<usize>,
+    /// The manifest archived, once asked for ([`SegmentCache::manifest_bytes`]): only
+    /// fixed-size fields change between structure or terms changes, so they are
+    /// patched in place rather than archived again.
+    archived: Option<ManifestBytes>,
+}
+
+/// An archived manifest and where its per-publish fields lie in its bytes.
+struct ManifestBytes {
+    bytes: SegmentBytes,
+    /// Offset of the cut's generation.
+    generation: usize,
+    /// Per layer, in manifest order: offsets of its generation, node count and id bounds.
+    layers: Vec<[usize; 4]>,
+}
+
+impl ManifestBytes {
+    /// Archives `manifest` and finds its per-publish fields.
+    fn new(manifest: &Manifest) -> Self {
+        let bytes = archive(manifest);
+        let archived = rkyv::access::<ArchivedManifest, rkyv::rancor::Error>(&bytes)
+            .expect("a manifest archived just now is valid");
+        let base = bytes.as_ptr().addr();
+        let at = |field: &rkyv::rend::u64_le| std::ptr::from_ref(field).addr() - base;
+        let generation = at(&archived.generation);
+        let layers = archived
+            .layers
+            .iter()
+            .map(|l| {
+                [
+                    at(&l.generation),
+                    at(&l.node_count),
+                    at(&l.min_id),
+                    at(&l.max_id),
+                ]
+            })
+            .collect();
+        ManifestBytes {
+            bytes,
+            generation,
+            layers,
+        }
+    }
+
+    /// Writes the cut's generation and entry `i`'s fields from `manifest`.
+    fn patch(&mut self, manifest: &Manifest, i: usize) {
+        let l = &manifest.layers[i];
+        let values = [l.generation, l.node_count, l.min_id, l.max_id];
+        for (offset, value) in self.layers[i].into_iter().zip(values) {
+            self.bytes[offset..offset + 8].copy_from_slice(&value.to_le_bytes());
+        }
+    }
+
+    /// Writes the cut's generation.
+    fn patch_generation(&mut self, generation: u64) {
+        let at = self.generation;
+        self.bytes[at..at + 8].copy_from_slice(&generation.to_le_bytes());
+    }
 }
 
 /// One layer's cached segment.
@@ -226,24 +281,25 @@ impl SegmentCache {
         &self.update_manifest(graph, generation, None).manifest
     }
 
-    /// [`SegmentCache::manifest`] with its archived length ([`Manifest::archived_len`]),
-    /// which is sized only when the structure or the terms changed: a publish archives the
-    /// manifest once, not twice.
+    /// [`SegmentCache::manifest`] archived: the bytes a publish copies into its sample.
+    /// They are archived only when the structure or the terms changed; otherwise the
+    /// changed entries' generations, node counts and id bounds and the cut's generation
+    /// are written into the kept bytes (the other fields have fixed archived sizes).
     ///
     /// `changed`, if given, lists every layer whose generation changed since the last
     /// call: with the structure and terms unchanged, only their entries are brought up to
     /// date (O(changed), not O(layers)).
-    pub fn manifest_with_len(
+    pub fn manifest_bytes(
         &mut self,
         graph: &SceneGraph,
         generation: u64,
         changed: Option<&[LayerId]>,
-    ) -> (&Manifest, usize) {
+    ) -> &[u8] {
         let cached = self.update_manifest(graph, generation, changed);
-        let len = *cached
-            .archived_len
-            .get_or_insert_with(|| cached.manifest.archived_len());
-        (&cached.manifest, len)
+        let archived = cached
+            .archived
+            .get_or_insert_with(|| ManifestBytes::new(&cached.manifest));
+        &archived.bytes
     }
 
     fn update_manifest(
@@ -256,11 +312,13 @@ impl SegmentCache {
         let cached = match self.manifest.take() {
             Some(mut c) if (c.structure_generation, c.terms_generation) == key => {
                 let m = &mut c.manifest;
+                let mut refreshed = Vec::new();
                 match changed {
                     Some(changed) => {
                         for id in changed {
                             if let Ok(i) = m.layers.binary_search_by_key(&id.0, |e| e.id) {
                                 refresh_entry(&mut m.layers[i], &self.layers, &graph.layers[id]);
+                                refreshed.push(i);
                             }
                         }
                     }
@@ -269,9 +327,16 @@ impl SegmentCache {
                         for (entry, l) in m.layers.iter_mut().zip(graph.layers.values()) {
                             refresh_entry(entry, &self.layers, l);
                         }
+                        refreshed.extend(0..m.layers.len());
                     }
                 }
                 m.generation = generation;
+                if let Some(archived) = c.archived.as_mut() {
+                    for i in refreshed {
+                        archived.patch(&c.manifest, i);
+                    }
+                    archived.patch_generation(generation);
+                }
                 c
             }
             _ => {
@@ -287,7 +352,7 @@ impl SegmentCache {
                     structure_generation: key.0,
                     terms_generation: key.1,
                     manifest: graph.manifest(generation),
-                    archived_len: None,
+                    archived: None,
                 }
             }
         };
