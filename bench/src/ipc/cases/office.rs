@@ -2,7 +2,7 @@
 
 use super::super::report::{Row, median, median_p99_us};
 use super::super::{Res, scenes};
-use super::drive::{Case, QUERY_LAYER};
+use super::drive::{Case, Observed, QUERY_LAYER};
 use super::{Ctx, in_scene};
 use ygg_dsg::layout::Layout;
 use ygg_store::snapshot::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN};
@@ -12,6 +12,7 @@ pub(super) fn case_office(ctx: &mut Ctx) -> Res<Vec<Row>> {
     let samples = ctx.plan.office_samples;
     let mut rows = vec![super::bare::case_bare(ctx, agents, samples)?];
     rows.extend(case_office_mint(ctx)?);
+    rows.push(case_layer_update_office103(ctx)?);
     for (name, what, chunk_len) in [
         (
             "mesh_append_office",
@@ -108,30 +109,47 @@ fn case_office_mint(ctx: &mut Ctx) -> Res<Vec<Row>> {
             scenes::touch_all_layers(g, i)
         })?;
         case.finish()?;
-        let mut rows = Vec::new();
-        for (o, case, what) in [
-            (
+        Ok(vec![
+            layers_row(
                 &single,
                 "layer_update_office",
                 "office (mint): one agent pose moved, only AGENTS republished → first query answered in the reader",
             ),
-            (
+            layers_row(
                 &full,
                 "full_office",
                 "office (mint): every layer changed and republished → first query answered in the reader",
             ),
-        ] {
-            let (vm, vp) = median_p99_us(&o.visible);
-            rows.push(
-                o.annotate(
-                    Row::latency(case, what, &o.all_answered)
-                        .with("visible_median_us", vm)
-                        .with("visible_p99_us", vp)
-                        .with("layers_sent", median(&o.layers_sent))
-                        .with("layers_total", o.layers_total as f64),
-                ),
-            );
-        }
-        Ok(rows)
+        ])
     })
+}
+
+/// The update of `layer_update_office` in the 103-room office (418 layers): a publish
+/// costs what changed, whatever the layer count.
+fn case_layer_update_office103(ctx: &mut Ctx) -> Res<Row> {
+    let graph = ctx.office_many_rooms()?;
+    in_scene(ctx, "office103", |ctx, scene| {
+        let mut mover = scenes::AgentMover::new(&graph)?;
+        let mut case = Case::start(scene, graph, 64 * 1024, 1, "latency", Some(QUERY_LAYER))?;
+        let samples = ctx.plan.office_samples;
+        let o = case.observe(&ctx.plan, 5, samples, &mut |g, _| mover.step(g))?;
+        case.finish()?;
+        Ok(layers_row(
+            &o,
+            "layer_update_office103",
+            "the same on the office split into 103 rooms (mint, 418 layers): only AGENTS republished → first query answered",
+        ))
+    })
+}
+
+/// A latency row with the time to the validated snapshot and the layers sent per publish.
+fn layers_row(o: &Observed, case: &str, what: &str) -> Row {
+    let (vm, vp) = median_p99_us(&o.visible);
+    o.annotate(
+        Row::latency(case, what, &o.all_answered)
+            .with("visible_median_us", vm)
+            .with("visible_p99_us", vp)
+            .with("layers_sent", median(&o.layers_sent))
+            .with("layers_total", o.layers_total as f64),
+    )
 }
