@@ -82,6 +82,11 @@ fn rows_under(seg: &ArchivedLayerSegment, parent: u64) -> &[u32] {
     let parents = u64s(&seg.parents);
     let by_parent = u32s(&seg.by_parent);
     let key = |r: &u32| parents.get(*r as usize).copied().unwrap_or(u64::MAX);
+    // Most layers below a room hold none of its children: two reads rule them out.
+    match (by_parent.first(), by_parent.last()) {
+        (Some(first), Some(last)) if key(first) <= parent && parent <= key(last) => {}
+        _ => return &[],
+    }
     let start = by_parent.partition_point(|r| key(r) < parent);
     let len = by_parent[start..].partition_point(|r| key(r) <= parent);
     &by_parent[start..start + len]
@@ -437,7 +442,8 @@ impl SceneView for ArchivedScene<'_> {
                 rows: rows.iter(),
             }
         } else {
-            merged.sort_unstable();
+            // Runs ascending each: the stable sort merges them in linear time.
+            merged.sort();
             ArchivedChildren::Merged(merged.into_iter())
         }
     }
