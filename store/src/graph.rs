@@ -17,7 +17,7 @@ use crate::change::{Change, LayerChanges};
 use crate::error::{EditResult, GraphEditError};
 use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
 use crate::index::LiveIndexes;
-use crate::touch_log::{TouchLog, TouchMark};
+use crate::touch_log::TouchLog;
 use crate::{Aabb, LayerId, NodeId, Point};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::BTreeMap;
@@ -100,7 +100,7 @@ pub struct SceneGraph {
     /// Live spatial indexes (layer and node indexes), kept exact by every mutation.
     pub(crate) indexes: LiveIndexes,
     /// Which layers changed when, for [`SceneGraph::layers_touched_since`].
-    touches: TouchLog,
+    pub(crate) touches: TouchLog,
 }
 
 /// Which inverted index a posting belongs to.
@@ -149,19 +149,6 @@ impl SceneGraph {
             l.touch(change);
             self.touches.touch(layer);
         }
-    }
-
-    /// A point after every change made so far, for [`SceneGraph::layers_touched_since`].
-    pub fn touch_mark(&self) -> TouchMark {
-        self.touches.mark()
-    }
-
-    /// The layers whose generation changed after `mark` (or that were added after it),
-    /// ascending; removed layers are not listed. O(changes since the mark, amortised),
-    /// whatever the number of layers: how a publisher finds what to send. `None` when
-    /// `mark` is not this graph's (a mark of another graph, or taken before a clone).
-    pub fn layers_touched_since(&self, mark: TouchMark) -> Option<Vec<LayerId>> {
-        self.touches.touched_since(mark)
     }
 
     /// The change journal of `layer` (which exists), replaced by an empty one starting

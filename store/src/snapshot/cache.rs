@@ -125,19 +125,27 @@ impl ManifestBytes {
         }
     }
 
-    /// Writes the cut's generation and entry `i`'s fields from `manifest`.
-    fn patch(&mut self, manifest: &Manifest, i: usize) {
-        let l = &manifest.layers[i];
-        let values = [l.generation, l.node_count, l.min_id, l.max_id];
+    /// Writes entry `i`'s generation, node count and id bounds from `entry`.
+    fn patch(&mut self, i: usize, entry: &ManifestLayer) {
+        let values = [
+            entry.generation,
+            entry.node_count,
+            entry.min_id,
+            entry.max_id,
+        ];
         for (offset, value) in self.layers[i].into_iter().zip(values) {
-            self.bytes[offset..offset + 8].copy_from_slice(&value.to_le_bytes());
+            self.write_u64(offset, value);
         }
     }
 
     /// Writes the cut's generation.
     fn patch_generation(&mut self, generation: u64) {
-        let at = self.generation;
-        self.bytes[at..at + 8].copy_from_slice(&generation.to_le_bytes());
+        self.write_u64(self.generation, generation);
+    }
+
+    /// Writes an archived (little-endian) `u64` at `offset`.
+    fn write_u64(&mut self, offset: usize, value: u64) {
+        self.bytes[offset..offset + 8].copy_from_slice(&value.to_le_bytes());
     }
 }
 
@@ -311,30 +319,24 @@ impl SegmentCache {
         let key = (graph.structure_generation, graph.terms_generation);
         let cached = match self.manifest.take() {
             Some(mut c) if (c.structure_generation, c.terms_generation) == key => {
-                let m = &mut c.manifest;
-                let mut refreshed = Vec::new();
                 match changed {
                     Some(changed) => {
                         for id in changed {
-                            if let Ok(i) = m.layers.binary_search_by_key(&id.0, |e| e.id) {
-                                refresh_entry(&mut m.layers[i], &self.layers, &graph.layers[id]);
-                                refreshed.push(i);
+                            let found = c.manifest.layers.binary_search_by_key(&id.0, |e| e.id);
+                            if let Ok(i) = found {
+                                c.refresh(i, &self.layers, &graph.layers[id]);
                             }
                         }
                     }
                     // The same layers as when it was built, both ascending by id.
                     None => {
-                        for (entry, l) in m.layers.iter_mut().zip(graph.layers.values()) {
-                            refresh_entry(entry, &self.layers, l);
+                        for (i, l) in graph.layers.values().enumerate() {
+                            c.refresh(i, &self.layers, l);
                         }
-                        refreshed.extend(0..m.layers.len());
                     }
                 }
-                m.generation = generation;
+                c.manifest.generation = generation;
                 if let Some(archived) = c.archived.as_mut() {
-                    for i in refreshed {
-                        archived.patch(&c.manifest, i);
-                    }
                     archived.patch_generation(generation);
                 }
                 c
@@ -357,6 +359,18 @@ impl SegmentCache {
             }
         };
         self.manifest.insert(cached)
+    }
+}
+
+impl CachedManifest {
+    /// Brings entry `i` up to date with its live layer `l`, in the manifest and in its
+    /// archived bytes if kept.
+    fn refresh(&mut self, i: usize, cache: &FxHashMap<LayerId, Box<Cached>>, l: &Layer) {
+        let entry = &mut self.manifest.layers[i];
+        refresh_entry(entry, cache, l);
+        if let Some(archived) = self.archived.as_mut() {
+            archived.patch(i, entry);
+        }
     }
 }
 
