@@ -390,29 +390,39 @@ fn random_corruptions_of_point_chunks_never_panic() {
     });
 }
 
-/// The sample scene's segments with the objects layer's index tree moved to a tree chunk
-/// (as a publishing writer sends a large one): the manifest, the layer segments, and the
-/// tree chunks in layer order.
+/// The sample scene's segments with every index tree moved to a tree chunk (as a
+/// publishing writer sends a large one): the manifest, the layer segments, and the tree
+/// chunks in layer order, then slot order (the layer index's base tree at slot 0, node
+/// index `i`'s tree at slot `1 + i`).
 fn tree_chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<TreeChunk>) {
     let mut layers = Vec::new();
     let mut trees = Vec::new();
+    let empty = || KdTree::new_from_entries(&[]).unwrap();
     for l in g.layers() {
         let mut s = g.layer_segment(l);
-        if let Some(index) = s.layer_index.as_mut() {
-            let empty = KdTree::new_from_entries(&[]).unwrap();
+        let generation = s.generation;
+        let mut chunk = |slot: u32, items: u32, tree: KdTree| {
             let r = TreeChunkRef {
-                generation: s.generation,
-                points: index.base_points,
+                generation,
+                points: tree.size() as u32,
             };
-            index.tree_chunk = Some(r);
             trees.push(TreeChunk {
                 version: FORMAT_VERSION,
                 layer: l.0,
-                slot: 0,
-                generation: r.generation,
-                items: index.base_rows,
-                tree: std::mem::replace(&mut index.tree, empty),
+                slot,
+                generation,
+                items,
+                tree,
             });
+            r
+        };
+        if let Some(index) = s.layer_index.as_mut() {
+            let tree = std::mem::replace(&mut index.tree, empty());
+            index.tree_chunk = Some(chunk(0, index.base_rows, tree));
+        }
+        for (i, index) in s.node_indexes.iter_mut().enumerate() {
+            let tree = std::mem::replace(&mut index.tree, empty());
+            index.tree_chunk = Some(chunk(1 + i as u32, index.ids.len() as u32, tree));
         }
         layers.push(s);
     }
@@ -446,34 +456,51 @@ fn check_tree_chunked_cut(
             let _ = query::nearest_nodes(&view, Scope::Layer(l), [0.5, 0.5, 0.5], 3);
             let _ = query::nodes_within_radius(&view, Scope::Layer(l), [0.5, 0.5, 0.5], 2.0);
         }
+        for n in view.layer_nodes(l) {
+            let id = view.node_id(n);
+            if let Some(index) = view.node_index(id) {
+                points += index.len();
+                let _ = query::nearest_in_subtree(&view, id, [0.5, 0.5, 0.5], 3);
+            }
+        }
     }
     Ok(points)
 }
 
 #[test]
 fn inconsistent_tree_chunks_are_refused_naming_what_is_wrong() {
-    let mut g = sample_scene();
-    let objects = g.layer_by_name("objects").unwrap();
-    g.enable_layer_index(objects).unwrap();
+    let g = tree_chunked_scene();
     let cut = tree_chunked_cut(&g);
-    assert_eq!(cut.2.len(), 1, "the objects layer's tree is a chunk");
+    assert_eq!(
+        cut.2.len(),
+        3,
+        "the objects layer's tree and two rooms' are chunks"
+    );
     let points = check_tree_chunked_cut(&cut, |_| ()).expect("the intact cut is accepted");
-    assert_eq!(points, 30, "the index holds every point of the layer");
+    assert_eq!(
+        points,
+        30 + 2 * 10,
+        "the layer index holds every point of the layer, each room's its objects'"
+    );
 
     let e = check_tree_chunked_cut(&cut, |t| t.clear()).unwrap_err();
-    assert!(e.contains("names its index's tree chunk, not given"), "{e}");
+    assert!(e.contains("names tree chunk 1, not given"), "{e}");
     let e = check_tree_chunked_cut(&cut, |t| t.push(t[0].clone())).unwrap_err();
     assert!(e.contains("1 tree chunks given that no layer names"), "{e}");
+    // The two rooms' trees swapped: each is refused by the slot its index names.
+    let e = check_tree_chunked_cut(&cut, |t| t.swap(0, 1)).unwrap_err();
+    assert!(e.contains("slot 2") && e.contains("names tree 1"), "{e}");
 
     // A tree of another generation (held from an older cut), of another layer, or with
     // items past the index's base rows.
     let chunk = |tamper: fn(&mut TreeChunk)| {
         let mut cut = tree_chunked_cut(&g);
-        tamper(&mut cut.2[0]);
+        let last = cut.2.len() - 1;
+        tamper(&mut cut.2[last]);
         check_tree_chunked_cut(&cut, |_| ()).unwrap_err()
     };
     let e = chunk(|t| t.generation -= 1);
-    assert!(e.contains("names its index tree at generation"), "{e}");
+    assert!(e.contains("names tree 0 at generation"), "{e}");
     let e = chunk(|t| t.layer += 1);
     assert!(e.contains("tree chunk segment (layer"), "{e}");
     let e = chunk(|t| t.items += 1);
@@ -491,17 +518,51 @@ fn inconsistent_tree_chunks_are_refused_naming_what_is_wrong() {
     index.tree_chunk.as_mut().unwrap().points += 1;
     let e = check_tree_chunked_cut(&lying, |_| ()).unwrap_err();
     assert!(e.contains("tree chunk's point count differs"), "{e}");
+    // A node index that names a chunk yet keeps a tree inline, or names a chunk of
+    // another point count.
+    let mut lying = tree_chunked_cut(&g);
+    let rooms = lying
+        .1
+        .iter_mut()
+        .find(|s| !s.node_indexes.is_empty())
+        .unwrap();
+    let tree = std::mem::replace(&mut lying.2[0].tree, KdTree::new_from_entries(&[]).unwrap());
+    rooms.node_indexes[0].tree = tree;
+    let e = check_tree_chunked_cut(&lying, |_| ()).unwrap_err();
+    assert!(
+        e.contains("travels as a chunk, yet the segment holds one"),
+        "{e}"
+    );
+    let mut lying = tree_chunked_cut(&g);
+    let rooms = lying
+        .1
+        .iter_mut()
+        .find(|s| !s.node_indexes.is_empty())
+        .unwrap();
+    rooms.node_indexes[1].tree_chunk.as_mut().unwrap().points -= 1;
+    let e = check_tree_chunked_cut(&lying, |_| ()).unwrap_err();
+    assert!(e.contains("slot 2") && e.contains("9 points"), "{e}");
+}
+
+/// [`sample_scene`] with a layer index on its objects and a node index on two rooms.
+fn tree_chunked_scene() -> SceneGraph {
+    let mut g = sample_scene();
+    let objects = g.layer_by_name("objects").unwrap();
+    g.enable_layer_index(objects).unwrap();
+    g.enable_node_index(NodeId(100)).unwrap();
+    g.enable_node_index(NodeId(102)).unwrap();
+    g
 }
 
 #[test]
 fn random_corruptions_of_tree_chunks_never_panic() {
-    let mut g = sample_scene();
-    let objects = g.layer_by_name("objects").unwrap();
-    g.enable_layer_index(objects).unwrap();
+    let g = tree_chunked_scene();
     let cut = tree_chunked_cut(&g);
-    damages_are_refused_or_harmless(0x7E, |rng| {
-        check_tree_chunked_cut(&cut, |trees| damage(&mut trees[0], rng))
-    });
+    for at in 0..cut.2.len() {
+        damages_are_refused_or_harmless(0x7E + at as u64, |rng| {
+            check_tree_chunked_cut(&cut, |trees| damage(&mut trees[at], rng))
+        });
+    }
 }
 
 #[test]

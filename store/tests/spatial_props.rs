@@ -372,8 +372,8 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
 
 /// A publishing writer and a reader in one: the writer's cache patches the layer indexes
 /// it built before and chunks every layer of more than [`CHUNK`] points (small, so that
-/// chunk boundaries fall everywhere) and sends the base tree of every layer index of more
-/// than [`TREE_CHUNK`] points as a tree chunk; like the transport, only chunks whose
+/// chunk boundaries fall everywhere) and sends every tree (layer index base, node index)
+/// of [`TREE_CHUNK`] points or more as a tree chunk; like the transport, only chunks whose
 /// generation changed are sent, and the reader keeps the others as it got them. A chunk
 /// the cache failed to resend after its points changed, or a tree after a fold, would
 /// answer queries wrongly.
@@ -386,7 +386,7 @@ struct Publisher {
 /// Points per chunk in [`Publisher`].
 const CHUNK: usize = 4;
 
-/// Fewest points of a layer index's base tree that [`Publisher`] sends as a tree chunk.
+/// Fewest points of a tree that [`Publisher`] sends as a tree chunk.
 const TREE_CHUNK: usize = 8;
 
 impl Publisher {
@@ -413,7 +413,7 @@ impl Publisher {
                 }
                 ids.push(id);
             }
-            if let Some((id, generation, tree)) = p.tree_chunk() {
+            for (id, generation, tree) in p.tree_chunks() {
                 if self.held.get(&id).map(|h| h.0) != Some(generation) {
                     self.held.insert(id, (generation, archive(&tree)));
                 }
@@ -455,8 +455,14 @@ fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Prob
         );
         assert_eq!(g.layer_len(l), view.layer_len(l));
         for n in view.layer_nodes(l) {
-            let live = g.node(view.node_id(n)).unwrap();
+            let id = view.node_id(n);
+            let live = g.node(id).unwrap();
             assert_eq!(g.points(live), view.points(n));
+            assert_eq!(
+                g.node_index(id).map(|i| i.len()),
+                view.node_index(id).map(|i| i.len()),
+                "node index of {id:?}"
+            );
         }
     }
 }

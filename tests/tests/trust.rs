@@ -91,10 +91,15 @@ fn copy_mode_answers_like_zero_copy_and_copies_only_changed_layers() {
     let a = snapshot_at(&mut shared, 1);
     let b = snapshot_at(&mut copied, 1);
     assert_eq!(answers(&a), answers(&b));
-    let layers = b.view().layers().count() as u64;
-    assert_eq!(copied.validations(), layers);
+    // Every segment (layers, point and tree chunks) validated once.
+    let segments = b.raw().layer_count() as u64;
+    assert!(
+        segments > b.view().layers().count() as u64,
+        "the office has chunks"
+    );
+    assert_eq!(copied.validations(), segments);
 
-    // One object moved: one more snapshot, only the changed layers copied and validated.
+    // One object moved: one more snapshot, only the changed segments copied and validated.
     let (mesh_node, moved) = {
         let g = writer.graph();
         let (mesh, _) = layout::object_mesh_layers(g)[0];
@@ -118,7 +123,10 @@ fn copy_mode_answers_like_zero_copy_and_copies_only_changed_layers() {
     let b2 = snapshot_at(&mut copied, report.generation);
     assert_eq!(answers(&a2), answers(&b2));
     assert_ne!(answers(&b), answers(&b2), "the move changed no answer");
-    assert_eq!(copied.validations(), layers + report.layers_sent as u64);
+    assert_eq!(
+        copied.validations(),
+        segments + (report.layers_sent + report.chunks_sent) as u64
+    );
     drop((a, b, a2, b2, shared, copied, writer));
     scene.assert_no_leftovers(STEP);
 }

@@ -293,9 +293,10 @@ impl SceneWriter {
                     )?;
                 }
             }
-            if let Some((id, tree_generation, chunk)) = published.tree_chunk()
-                && self.publisher.layer_generation(id) != Some(tree_generation)
-            {
+            for (id, tree_generation, chunk) in published.tree_chunks() {
+                if self.publisher.layer_generation(id) == Some(tree_generation) {
+                    continue;
+                }
                 let len = chunk.archived_len();
                 send_chunk(
                     &mut self.publisher,
@@ -354,7 +355,7 @@ impl SceneWriter {
             for (id, generation) in published.chunks() {
                 set(id, generation);
             }
-            if let Some((id, generation, _)) = published.tree_chunk() {
+            for (id, generation, _) in published.tree_chunks() {
                 set(id, generation);
             }
         }
@@ -383,14 +384,12 @@ impl SceneWriter {
             );
         }
         for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
-            entries.extend(
-                published
-                    .tree_chunk()
-                    .map(|(layer_id, generation, _)| ManifestEntry {
-                        layer_id,
-                        generation,
-                    }),
-            );
+            entries.extend(published.tree_chunks().map(|(layer_id, generation, _)| {
+                ManifestEntry {
+                    layer_id,
+                    generation,
+                }
+            }));
         }
         let live: BTreeSet<u32> = entries.iter().map(|e| e.layer_id).collect();
         for gone in self.published_segments.difference(&live) {

@@ -409,6 +409,7 @@ impl SceneGraph {
             root: root.0,
             ids: members.iter().map(|m| m.0.0).collect(),
             tree: build_tree(&entries),
+            tree_chunk: None,
         }
     }
 }

@@ -390,8 +390,9 @@ fn refresh_entry(entry: &mut ManifestLayer, cache: &FxHashMap<LayerId, Box<Cache
 
 /// The chunk segments a cached layer publishes (none unless it is in published form).
 fn published_chunks(c: &Cached) -> usize {
-    let (points, tree) = PublishedLayer::new(&c.segment, &c.chunks).chunk_shape();
-    points + usize::from(tree)
+    PublishedLayer::new(&c.segment, &c.chunks)
+        .chunk_shape()
+        .segments()
 }
 
 fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
@@ -533,6 +534,7 @@ fn patched(
     for index in &mut s.node_indexes {
         if roots.binary_search(&NodeId(index.root)).is_ok() {
             *index = graph.archived_node_index(NodeId(index.root));
+            chunks.node_trees_rebuilt.push(index.root);
         }
     }
     Some(Box::new(Cached {

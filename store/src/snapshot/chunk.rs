@@ -3,8 +3,10 @@
 //! chunks it touches (appending to a mesh node sends the last chunk and the small layer
 //! segment, not the whole column) and a reader keeps, and validated once, the rest.
 //!
-//! A large layer index's base tree is published the same way, as a [`TreeChunk`]: sent
-//! when the base is built or folded, not with every patch of the index.
+//! Kd-trees are published the same way, as [`TreeChunk`]s: a layer index's base tree is
+//! sent when the base is built or folded, not with every patch of the index, and a node
+//! index's tree when it is built anew, not with every change of its root's layer (moving
+//! one object sends its own tree, not those of every object of its layer).
 //!
 //! A chunk travels as a segment of its own, under a segment id derived from its layer
 //! and place ([`chunk_segment_id`], [`tree_chunk_segment_id`]): ids with the top bit
@@ -15,12 +17,13 @@ use super::schema::{
     ArchivedPointChunk, ArchivedTreeChunk, ArchivedTreeChunkRef, FORMAT_VERSION, PointChunk,
 };
 use crate::index::{KdTree, check_tree};
-use crate::{LayerId, Point, SnapshotError};
+use crate::{LayerId, NodeId, Point, SnapshotError};
 use rkyv::munge::munge;
 use rkyv::rancor::Fallible;
 use rkyv::ser::{Allocator, Writer};
 use rkyv::vec::{ArchivedVec, VecResolver};
 use rkyv::{Archive, Place, Serialize};
+use std::collections::HashMap;
 
 /// Points per chunk a publishing writer uses by default (384 KiB of coordinates); layers
 /// of more points are published chunked.
@@ -35,10 +38,11 @@ const CHUNK_ID_BIT: u32 = 1 << 31;
 /// Second bit of a chunk's segment id: set for tree chunks, clear for point chunks.
 const TREE_CHUNK_BIT: u32 = 1 << 30;
 
-/// Fewest points a layer index's base tree has for a publishing writer to send it as a
-/// [`TreeChunk`](super::TreeChunk) (about 32 KiB archived); smaller trees stay in their
-/// layer segment.
-pub const TREE_CHUNK_MIN_POINTS: usize = 2048;
+/// Fewest points a kd-tree (a layer index's base tree or a node index's tree) has for a
+/// publishing writer to send it as a [`TreeChunk`](super::TreeChunk) (about 1 KiB
+/// archived); smaller trees stay in their layer segment, where they cost less than a
+/// segment of their own.
+pub const TREE_CHUNK_MIN_POINTS: usize = 64;
 
 /// Bits of a chunk's segment id that hold its place in the column.
 const CHUNK_INDEX_BITS: u32 = 11;
@@ -82,11 +86,17 @@ pub(crate) fn is_chunked(layer: LayerId, points: usize, chunk_len: usize) -> boo
     points > chunk_len && chunk_segment_id(layer, chunk_count(points, chunk_len) - 1).is_some()
 }
 
-/// Whether a layer index's base tree of `points` points is published as a tree chunk
-/// by a writer that sends trees of `min_points` or more as chunks: when it is that large
-/// (and not empty) and its layer's ids fit the segment ids.
-pub(crate) fn has_tree_chunk(layer: LayerId, points: usize, min_points: usize) -> bool {
-    points >= min_points.max(1) && tree_chunk_segment_id(layer, 0).is_some()
+/// Whether tree `slot` of `layer` (0: its layer index's base tree, `1 + i`: the tree of
+/// its node index `i`), of `points` points, is published as a tree chunk by a writer
+/// that sends trees of `min_points` or more as chunks: when it is that large (and not
+/// empty) and its segment id fits.
+pub(crate) fn has_tree_chunk(
+    layer: LayerId,
+    slot: usize,
+    points: usize,
+    min_points: usize,
+) -> bool {
+    points >= min_points.max(1) && tree_chunk_segment_id(layer, slot).is_some()
 }
 
 /// Chunks of `chunk_len` a column of `points` points takes.
@@ -156,8 +166,8 @@ impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSourc
     }
 }
 
-/// A layer index's base tree archived as a [`TreeChunk`](super::TreeChunk) straight from
-/// the tree it holds (no copy of the tree).
+/// A layer's kd-tree archived as a [`TreeChunk`](super::TreeChunk) straight from the tree
+/// it holds (no copy of the tree).
 #[derive(Debug, Clone, Copy)]
 pub struct TreeChunkSource<'a> {
     layer: u32,
@@ -213,22 +223,24 @@ pub(crate) fn check_tree_chunk(chunk: &ArchivedTreeChunk) -> Result<(), String> 
     check_tree(&chunk.tree, chunk.items.to_native() as usize)
 }
 
-/// Checks a tree chunk against the layer index that names it: same layer, slot 0, the
-/// generation and point count of `r`, items within the index's base rows.
+/// Checks a tree chunk against the index that names it as tree `slot` of `layer`: same
+/// layer and slot, the generation and point count of `r`, items within `items` (the
+/// layer index's base rows, the node index's id table).
 pub(crate) fn check_tree_chunk_matches(
     chunk: &ArchivedTreeChunk,
     layer: u32,
-    base_rows: u32,
+    slot: u32,
+    items: u32,
     r: &ArchivedTreeChunkRef,
 ) -> Result<(), String> {
     if chunk.layer != layer
-        || chunk.slot != 0
+        || chunk.slot != slot
         || chunk.generation != r.generation
         || chunk.tree.size() != r.points.to_native() as usize
-        || chunk.items.to_native() > base_rows
+        || chunk.items.to_native() > items
     {
         return Err(format!(
-            "tree chunk segment (layer {}, slot {}, generation {}, {} points, items below {}) where layer {layer} names its index tree at generation {} with {} points, items below {base_rows}",
+            "tree chunk segment (layer {}, slot {}, generation {}, {} points, items below {}) where layer {layer} names tree {slot} at generation {} with {} points, items below {items}",
             chunk.layer,
             chunk.slot,
             chunk.generation,
@@ -303,9 +315,16 @@ pub(crate) fn check_chunk_matches(
 impl crate::SceneGraph {
     /// Segments a snapshot of this graph takes when published in point chunks of
     /// `chunk_len` ([`POINT_CHUNK_LEN`] by default): one per layer, plus the point chunks
-    /// of each chunked layer and the tree chunk of each large layer index (for sizing a
+    /// of each chunked layer and the tree chunks of its large indexes (for sizing a
     /// publisher's bound on segments per cut).
     pub fn snapshot_segments(&self, chunk_len: usize) -> usize {
+        let mut node_trees: HashMap<LayerId, Vec<(NodeId, usize)>> = HashMap::new();
+        for (root, tree) in &self.indexes.nodes {
+            node_trees
+                .entry(self.nodes[root].layer)
+                .or_default()
+                .push((*root, tree.len()));
+        }
         self.layers
             .iter()
             .map(|(&id, l)| {
@@ -315,9 +334,18 @@ impl crate::SceneGraph {
                 } else {
                     0
                 };
-                let tree_chunk = self.indexes.layers.contains_key(&id)
-                    && has_tree_chunk(id, points, TREE_CHUNK_MIN_POINTS);
-                1 + point_chunks + usize::from(tree_chunk)
+                let layer_tree = self.indexes.layers.contains_key(&id)
+                    && has_tree_chunk(id, 0, points, TREE_CHUNK_MIN_POINTS);
+                let mut roots = node_trees.remove(&id).unwrap_or_default();
+                roots.sort_unstable();
+                let node_tree_chunks = roots
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, (_, points))| {
+                        has_tree_chunk(id, 1 + i, *points, TREE_CHUNK_MIN_POINTS)
+                    })
+                    .count();
+                1 + point_chunks + usize::from(layer_tree) + node_tree_chunks
             })
             .sum()
     }

@@ -1,8 +1,8 @@
 //! What a publishing writer's [`super::SegmentCache`] keeps per chunked layer: which
 //! column positions changed since the last publish ([`ChangedPoints`]) and each chunk's
 //! generation ([`ChunkState`]), so that a publish resends only the chunks whose points
-//! changed, and the layer index's base tree only when it was built anew; and
-//! [`PublishedLayer`], a layer as it is published.
+//! changed, and a tree (the layer index's base tree, a node index's tree) only when it
+//! was built anew; and [`PublishedLayer`], a layer as it is published.
 
 use super::chunk::{
     PointChunkSource, TreeChunkSource, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
@@ -121,6 +121,14 @@ pub(super) struct ChunkState {
     tree_aside: Option<KdTree>,
     /// Whether the base tree was built anew since the last publish.
     pub(super) tree_rebuilt: bool,
+    /// Per node index of the last published segment, by position: its root and its
+    /// tree chunk (`None` for a tree kept inline).
+    node_refs: Vec<(u64, Option<TreeChunkRef>)>,
+    /// The node indexes' trees that travel as chunks, by position, moved out of the
+    /// segment while it is in published form.
+    node_trees_aside: Vec<(usize, KdTree)>,
+    /// Roots whose node index tree was built anew since the last publish.
+    pub(super) node_trees_rebuilt: Vec<u64>,
 }
 
 impl ChunkState {
@@ -133,12 +141,16 @@ impl ChunkState {
         }
     }
 
-    /// Puts the column and the base tree back into `segment` (the form the cache
-    /// patches).
+    /// Puts the column and the trees back into `segment` (the form the cache patches).
     pub(super) fn restore(&mut self, segment: &mut LayerSegment) {
         if let Some(tree) = self.tree_aside.take()
             && let Some(index) = segment.layer_index.as_mut()
         {
+            index.tree = tree;
+            index.tree_chunk = None;
+        }
+        for (position, tree) in self.node_trees_aside.drain(..) {
+            let index = &mut segment.node_indexes[position];
             index.tree = tree;
             index.tree_chunk = None;
         }
@@ -154,7 +166,8 @@ impl ChunkState {
     /// lists the chunks, each at the generation it last changed (the segment's
     /// generation if it changed since the last publish). A layer index's base tree of
     /// `tree_min_points` or more moves aside too, named by its tree chunk, which keeps
-    /// its generation until the tree is built anew.
+    /// its generation until the tree is built anew; so do node indexes' trees of
+    /// `tree_min_points` or more.
     pub(super) fn publish_form(
         &mut self,
         segment: &mut LayerSegment,
@@ -162,6 +175,7 @@ impl ChunkState {
         tree_min_points: usize,
     ) {
         self.tree_publish_form(segment, tree_min_points);
+        self.node_trees_publish_form(segment, tree_min_points);
         let layer = LayerId(segment.layer);
         let total = segment.points.len();
         let changed = std::mem::take(&mut self.changed);
@@ -199,7 +213,7 @@ impl ChunkState {
         let Some(index) = segment
             .layer_index
             .as_mut()
-            .filter(|i| has_tree_chunk(layer, i.base_points as usize, min_points))
+            .filter(|i| has_tree_chunk(layer, 0, i.base_points as usize, min_points))
         else {
             self.tree_ref = None;
             return;
@@ -216,11 +230,46 @@ impl ChunkState {
         index.tree_chunk = Some(r);
         self.tree_aside = Some(std::mem::replace(&mut index.tree, build_tree(&[])));
     }
+
+    /// The node indexes' part of [`ChunkState::publish_form`]: the tree of node index
+    /// `i` travels as tree chunk `1 + i` when it is large enough, and keeps its
+    /// generation while the same root holds the slot and its tree is not built anew.
+    fn node_trees_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
+        let mut rebuilt = std::mem::take(&mut self.node_trees_rebuilt);
+        rebuilt.sort_unstable();
+        let layer = LayerId(segment.layer);
+        let old_refs = std::mem::take(&mut self.node_refs);
+        for (i, index) in segment.node_indexes.iter_mut().enumerate() {
+            let points = index.tree.size();
+            if !has_tree_chunk(layer, 1 + i, points, min_points) {
+                self.node_refs.push((index.root, None));
+                continue;
+            }
+            let generation = match old_refs.get(i) {
+                Some(&(root, Some(old)))
+                    if root == index.root
+                        && old.points as usize == points
+                        && rebuilt.binary_search(&root).is_err() =>
+                {
+                    old.generation
+                }
+                _ => segment.generation,
+            };
+            let r = TreeChunkRef {
+                generation,
+                points: points as u32,
+            };
+            self.node_refs.push((index.root, Some(r)));
+            index.tree_chunk = Some(r);
+            let tree = std::mem::replace(&mut index.tree, build_tree(&[]));
+            self.node_trees_aside.push((i, tree));
+        }
+    }
 }
 
 /// A layer as a publishing writer sends it: the layer segment (points moved to chunks
-/// when the layer is chunked, a large layer index's base tree moved to a tree chunk),
-/// its point chunks and its tree chunk, each with its segment id and generation
+/// when the layer is chunked, large trees moved to tree chunks), its point chunks and
+/// its tree chunks, each with its segment id and generation
 /// ([`super::SegmentCache::published_layer`]).
 #[derive(Debug, Clone, Copy)]
 pub struct PublishedLayer<'c> {
@@ -228,6 +277,24 @@ pub struct PublishedLayer<'c> {
     pub segment: &'c LayerSegment,
     points: &'c [Point],
     tree: Option<&'c KdTree>,
+    node_trees: &'c [(usize, KdTree)],
+}
+
+/// The chunk segments a published layer sends beside its layer segment
+/// ([`PublishedLayer::chunk_shape`]): equal shapes mean the same segment ids.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChunkShape {
+    /// Point chunks.
+    pub point_chunks: usize,
+    /// Slots of the tree chunks, ascending.
+    pub tree_slots: Vec<usize>,
+}
+
+impl ChunkShape {
+    /// Chunk segments in all.
+    pub fn segments(&self) -> usize {
+        self.point_chunks + self.tree_slots.len()
+    }
 }
 
 impl<'c> PublishedLayer<'c> {
@@ -246,36 +313,54 @@ impl<'c> PublishedLayer<'c> {
             segment,
             points,
             tree,
+            node_trees: &state.node_trees_aside,
         }
     }
 
-    /// The layer index's base tree, if it travels as a tree chunk: its segment id,
-    /// generation, and the chunk ready to archive (the tree is not copied).
-    pub fn tree_chunk(&self) -> Option<(u32, u64, TreeChunkSource<'c>)> {
+    /// The trees that travel as tree chunks, ascending by slot (the layer index's base
+    /// tree first, then node indexes' trees): each one's segment id, generation, and the
+    /// chunk ready to archive (the tree is not copied).
+    pub fn tree_chunks(&self) -> impl Iterator<Item = (u32, u64, TreeChunkSource<'c>)> + 'c {
         let layer = LayerId(self.segment.layer);
-        let index = self.segment.layer_index.as_ref()?;
-        let r = index.tree_chunk?;
-        let id = tree_chunk_segment_id(layer, 0).expect("a tree chunk's id fits");
-        let tree = self.tree?;
-        Some((
-            id,
-            r.generation,
-            TreeChunkSource::new(layer, 0, r.generation, index.base_rows, tree),
-        ))
+        let segment = self.segment;
+        let base = self.tree.and_then(|tree| {
+            let index = segment.layer_index.as_ref()?;
+            let r = index.tree_chunk?;
+            Some((0, r, index.base_rows, tree))
+        });
+        let nodes = self.node_trees.iter().filter_map(move |(i, tree)| {
+            let index = &segment.node_indexes[*i];
+            let r = index.tree_chunk?;
+            Some((1 + i, r, index.ids.len() as u32, tree))
+        });
+        base.into_iter()
+            .chain(nodes)
+            .map(move |(slot, r, items, tree)| {
+                let id = tree_chunk_segment_id(layer, slot).expect("a tree chunk's id fits");
+                (
+                    id,
+                    r.generation,
+                    TreeChunkSource::new(layer, slot, r.generation, items, tree),
+                )
+            })
     }
 
-    /// The chunk segments the layer publishes beside its layer segment: its point chunks
-    /// and whether its index's base tree travels as a tree chunk. Equal shapes mean
-    /// the same segment ids.
-    pub fn chunk_shape(&self) -> (usize, bool) {
-        (
-            self.segment.point_chunks.len(),
-            self.segment
-                .layer_index
-                .as_ref()
-                .is_some_and(|i| i.tree_chunk.is_some())
-                && self.tree.is_some(),
-        )
+    /// The chunk segments the layer publishes beside its layer segment.
+    pub fn chunk_shape(&self) -> ChunkShape {
+        let base = self
+            .segment
+            .layer_index
+            .as_ref()
+            .is_some_and(|i| i.tree_chunk.is_some())
+            && self.tree.is_some();
+        ChunkShape {
+            point_chunks: self.segment.point_chunks.len(),
+            tree_slots: base
+                .then_some(0)
+                .into_iter()
+                .chain(self.node_trees.iter().map(|(i, _)| 1 + i))
+                .collect(),
+        }
     }
 
     /// The layer's point chunks: `(segment id, generation)` each, in column order (none

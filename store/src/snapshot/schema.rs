@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -123,19 +123,22 @@ pub struct TreeChunkRef {
     pub points: u32,
 }
 
-/// A kd-tree of a layer published as a segment of its own ([`TreeChunkRef`]), so that
-/// it is sent once per build rather than with every change of its layer.
+/// A kd-tree of a layer (its layer index's base tree or the tree of one of its node
+/// indexes) published as a segment of its own ([`TreeChunkRef`]), so that it is sent
+/// once per build rather than with every change of its layer.
 #[derive(Archive, Serialize, Debug)]
 pub struct TreeChunk {
     /// [`FORMAT_VERSION`] of the writer.
     pub version: u32,
     /// The layer whose tree this is.
     pub layer: u32,
-    /// The tree's place among its layer's tree chunks (0: the layer index's base tree).
+    /// The tree's place among its layer's tree chunks (0: the layer index's base tree;
+    /// `1 + i`: the tree of node index `i` of the layer segment).
     pub slot: u32,
     /// The chunk's generation (see [`TreeChunkRef::generation`]).
     pub generation: u64,
-    /// Every item of `tree` is below this (the base rows of a layer index).
+    /// Every item of `tree` is below this (the base rows of a layer index, the id table's
+    /// length of a node index).
     pub items: u32,
     /// The tree.
     pub tree: KdTree,
@@ -175,8 +178,15 @@ pub struct NodeIndexSegment {
     /// Ids of the nodes with points in the root's sub-tree, ascending; an item is a
     /// position in this table.
     pub ids: Vec<u64>,
-    /// A kd-tree over every point in the sub-tree.
+    /// A kd-tree over every point in the sub-tree. Empty when the tree travels as a
+    /// [`TreeChunk`] (`tree_chunk`).
     pub tree: KdTree,
+    /// The tree's chunk, when it is published as a segment of its own (by a publishing
+    /// writer, for a tree of [`TREE_CHUNK_MIN_POINTS`](super::TREE_CHUNK_MIN_POINTS)
+    /// points or more): its slot among its layer's tree chunks is 1 + the index's
+    /// position in `node_indexes`. Sent again only when the tree is built anew (its
+    /// sub-tree's points changed) or its slot holds another root.
+    pub tree_chunk: Option<TreeChunkRef>,
 }
 
 /// A layer's entry in the manifest.

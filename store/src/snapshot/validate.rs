@@ -348,6 +348,12 @@ fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), St
         }
         previous = Some(root);
         check_tree(&ni.tree, ni.ids.len()).map_err(|e| format!("node index {root}: {e}"))?;
+        // A tree sent as a chunk is checked against its reference when the cut is joined.
+        if ni.tree_chunk.is_some() && ni.tree.size() != 0 {
+            return Err(format!(
+                "node index {root}: its tree travels as a chunk, yet the segment holds one"
+            ));
+        }
     }
     Ok(())
 }

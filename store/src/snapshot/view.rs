@@ -2,8 +2,8 @@
 
 use super::chunk::{check_chunk_matches, check_tree_chunk_matches, chunk_points};
 use super::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, NO_PARENT, u32s,
-    u64s,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk,
+    ArchivedTreeChunkRef, NO_PARENT, u32s, u64s,
 };
 use super::validate::{LayerPositions, check_dag};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
@@ -29,9 +29,9 @@ pub struct ArchivedScene<'a> {
     /// Per layer position (and one past the last), where its chunks start in `chunks`;
     /// empty when no layer is chunked.
     chunk_start: Vec<u32>,
-    /// The layer index base trees that travel as tree chunks, by layer position
-    /// (ascending).
-    index_trees: Vec<(u32, &'a ArchivedKdTree)>,
+    /// The trees that travel as tree chunks, by (layer id, slot), ascending: slot 0 is
+    /// a layer index's base tree, slot `1 + i` the tree of the layer's node index `i`.
+    index_trees: Vec<((u32, u32), &'a ArchivedKdTree)>,
 }
 
 /// A node's children in an [`ArchivedScene`], ascending by id.
@@ -172,18 +172,23 @@ impl<'a> ArchivedScene<'a> {
         }
         let mut next = trees.iter();
         for l in &layers {
+            let layer = l.layer.to_native();
+            let mut expect = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
+                let tree = next
+                    .next()
+                    .ok_or_else(|| format!("layer {layer} names tree chunk {slot}, not given"))?;
+                check_tree_chunk_matches(tree, layer, slot, items, r)
+            };
             if let Some(index) = l.layer_index.as_ref()
                 && let Some(r) = index.tree_chunk.as_ref()
             {
-                let tree = next.next().ok_or_else(|| {
-                    format!("layer {} names its index's tree chunk, not given", l.layer)
-                })?;
-                check_tree_chunk_matches(
-                    tree,
-                    l.layer.to_native(),
-                    index.base_rows.to_native(),
-                    r,
-                )?;
+                expect(0, index.base_rows.to_native(), r)?;
+            }
+            for (i, index) in l.node_indexes.iter().enumerate() {
+                if let Some(r) = index.tree_chunk.as_ref() {
+                    // `check_layer` bounded the node indexes by the layer's rows.
+                    expect(1 + i as u32, index.ids.len() as u32, r)?;
+                }
             }
         }
         if next.next().is_some() {
@@ -215,16 +220,10 @@ impl<'a> ArchivedScene<'a> {
             }
             chunk_start.push(at);
         }
-        let index_trees = layers
-            .iter()
-            .enumerate()
-            .filter(|(_, l)| {
-                l.layer_index
-                    .as_ref()
-                    .is_some_and(|i| i.tree_chunk.is_some())
-            })
-            .zip(trees)
-            .map(|((position, _), t)| (position as u32, &t.tree))
+        // The join checked each tree chunk's layer and slot against the index naming it.
+        let index_trees = trees
+            .into_iter()
+            .map(|t| ((t.layer.to_native(), t.slot.to_native()), &t.tree))
             .collect();
         ArchivedScene {
             manifest,
@@ -233,6 +232,15 @@ impl<'a> ArchivedScene<'a> {
             chunk_start,
             index_trees,
         }
+    }
+
+    /// Tree `slot` of layer `layer` (id), which travels as a tree chunk.
+    fn tree_chunk(&self, layer: u32, slot: u32) -> Option<&'a ArchivedKdTree> {
+        let at = self
+            .index_trees
+            .binary_search_by_key(&(layer, slot), |(key, _)| *key)
+            .ok()?;
+        Some(self.index_trees[at].1)
     }
 
     /// The point column of the layer at manifest position `layer`.
@@ -541,13 +549,7 @@ impl SceneView for ArchivedScene<'_> {
         let (position, seg) = self.segment(layer)?;
         let index = seg.layer_index.as_ref()?;
         let tree = match index.tree_chunk.as_ref() {
-            Some(_) => {
-                let at = self
-                    .index_trees
-                    .binary_search_by_key(&position, |(p, _)| *p)
-                    .ok()?;
-                self.index_trees[at].1
-            }
+            Some(_) => self.tree_chunk(seg.layer.to_native(), 0)?,
             None => &index.tree,
         };
         let patch = RowPatch::new(
@@ -569,7 +571,12 @@ impl SceneView for ArchivedScene<'_> {
             .binary_search_by_key(&node.0, |ni| ni.root.to_native())
             .ok()?;
         let ni = &seg.node_indexes[at];
-        // `check_layer` bounded the tree's items by the index's id table.
-        Some(ArchivedIndex::new(&ni.tree, u64s(&ni.ids)))
+        let tree = match ni.tree_chunk.as_ref() {
+            Some(_) => self.tree_chunk(seg.layer.to_native(), 1 + at as u32)?,
+            None => &ni.tree,
+        };
+        // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
+        // the tree's items by the index's id table.
+        Some(ArchivedIndex::new(tree, u64s(&ni.ids)))
     }
 }
