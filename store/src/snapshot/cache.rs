@@ -534,7 +534,7 @@ fn patched(
     for index in &mut s.node_indexes {
         if roots.binary_search(&NodeId(index.root)).is_ok() {
             *index = graph.archived_node_index(NodeId(index.root));
-            chunks.node_trees_rebuilt.push(index.root);
+            chunks.node_tree_rebuilt(index.root);
         }
     }
     Some(Box::new(Cached {

@@ -39,10 +39,12 @@ const CHUNK_ID_BIT: u32 = 1 << 31;
 const TREE_CHUNK_BIT: u32 = 1 << 30;
 
 /// Fewest points a kd-tree (a layer index's base tree or a node index's tree) has for a
-/// publishing writer to send it as a [`TreeChunk`](super::TreeChunk) (about 1 KiB
-/// archived); smaller trees stay in their layer segment, where they cost less than a
-/// segment of their own.
-pub const TREE_CHUNK_MIN_POINTS: usize = 64;
+/// publishing writer to send it as a [`TreeChunk`](super::TreeChunk) (about 20 KiB
+/// archived); smaller trees stay in their layer segment. Every segment of a cut costs
+/// each reader a receive and a join per cut and a validation at attach: with a bound of
+/// 64 points the office's 213 object trees became chunks and single-layer updates and
+/// attach got slower by more than the bytes they saved (see `bench/results/issue19.md`).
+pub const TREE_CHUNK_MIN_POINTS: usize = 1024;
 
 /// Bits of a chunk's segment id that hold its place in the column.
 const CHUNK_INDEX_BITS: u32 = 11;

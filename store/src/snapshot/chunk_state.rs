@@ -127,8 +127,12 @@ pub(super) struct ChunkState {
     /// The node indexes' trees that travel as chunks, by position, moved out of the
     /// segment while it is in published form.
     node_trees_aside: Vec<(usize, KdTree)>,
-    /// Roots whose node index tree was built anew since the last publish.
-    pub(super) node_trees_rebuilt: Vec<u64>,
+    /// Roots whose node index tree was built anew since the last publish, among those
+    /// whose tree the last publish sent as a chunk.
+    node_trees_rebuilt: Vec<u64>,
+    /// Empty trees that stand in for the trees moved aside, kept for reuse: building
+    /// one costs about a microsecond, a publish moves a tree per chunked index.
+    empty_trees: Vec<KdTree>,
 }
 
 impl ChunkState {
@@ -146,12 +150,14 @@ impl ChunkState {
         if let Some(tree) = self.tree_aside.take()
             && let Some(index) = segment.layer_index.as_mut()
         {
-            index.tree = tree;
+            self.empty_trees
+                .push(std::mem::replace(&mut index.tree, tree));
             index.tree_chunk = None;
         }
         for (position, tree) in self.node_trees_aside.drain(..) {
             let index = &mut segment.node_indexes[position];
-            index.tree = tree;
+            self.empty_trees
+                .push(std::mem::replace(&mut index.tree, tree));
             index.tree_chunk = None;
         }
         if !segment.point_chunks.is_empty() {
@@ -159,6 +165,19 @@ impl ChunkState {
             segment.point_chunks.clear();
         }
         segment.point_chunk_len = 0;
+    }
+
+    /// Notes that the tree of the node index rooted at `root` was built anew: if the last
+    /// publish sent it as a chunk, the next one sends it again. (Nothing is noted for a
+    /// cache that never publishes, whose segments keep their trees inline.)
+    pub(super) fn node_tree_rebuilt(&mut self, root: u64) {
+        if self
+            .node_refs
+            .iter()
+            .any(|&(r, chunk)| r == root && chunk.is_some())
+        {
+            self.node_trees_rebuilt.push(root);
+        }
     }
 
     /// Brings the chunks up to date with `segment` and puts it in published form: for a
@@ -228,7 +247,8 @@ impl ChunkState {
         };
         self.tree_ref = Some(r);
         index.tree_chunk = Some(r);
-        self.tree_aside = Some(std::mem::replace(&mut index.tree, build_tree(&[])));
+        let empty = self.empty_trees.pop().unwrap_or_else(|| build_tree(&[]));
+        self.tree_aside = Some(std::mem::replace(&mut index.tree, empty));
     }
 
     /// The node indexes' part of [`ChunkState::publish_form`]: the tree of node index
@@ -261,7 +281,8 @@ impl ChunkState {
             };
             self.node_refs.push((index.root, Some(r)));
             index.tree_chunk = Some(r);
-            let tree = std::mem::replace(&mut index.tree, build_tree(&[]));
+            let empty = self.empty_trees.pop().unwrap_or_else(|| build_tree(&[]));
+            let tree = std::mem::replace(&mut index.tree, empty);
             self.node_trees_aside.push((i, tree));
         }
     }

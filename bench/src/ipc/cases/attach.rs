@@ -8,6 +8,7 @@ use super::super::{Res, check_interrupted, unix_ns};
 use super::Ctx;
 use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, reader_args};
 use std::time::Instant;
+use ygg_store::snapshot::POINT_CHUNK_LEN;
 use ygg_store::{SceneGraph, SceneView};
 use ygg_writer::SceneWriter;
 
@@ -118,7 +119,8 @@ impl Attached {
 /// Two idle writers publish `graph` once, one with the layer bound sized from the scene (the
 /// default) and one with the fixed reference bound; `samples` reader processes attach to
 /// each, alternating between the two (ABBA), each timed from its start to its first
-/// nearest-node query answered. Rows `case` and `case_bound512`.
+/// nearest-node query answered. Rows `case` and `case_bound512` (the latter only for a
+/// scene that fits the reference bound).
 pub(super) fn case_attach(
     ctx: &mut Ctx,
     case: &str,
@@ -127,14 +129,23 @@ pub(super) fn case_attach(
     samples: usize,
 ) -> Res<Vec<Row>> {
     let layers = graph.layers().count();
+    // A scene of more segments than the reference bound cannot be published under it.
+    let fits_reference = graph.snapshot_segments(POINT_CHUNK_LEN) <= REFERENCE_MAX_LAYERS;
     let mut sized = Attached::start(case, graph.clone(), None)?;
-    let mut reference = Attached::start(
-        &format!("{case}-bound512"),
-        graph,
-        Some(REFERENCE_MAX_LAYERS),
-    )?;
+    let mut reference = match fits_reference {
+        true => Some(Attached::start(
+            &format!("{case}-bound512"),
+            graph,
+            Some(REFERENCE_MAX_LAYERS),
+        )?),
+        false => None,
+    };
     for i in 0..samples {
         check_interrupted()?;
+        let Some(reference) = reference.as_mut() else {
+            sized.sample()?;
+            continue;
+        };
         if i % 2 == 0 {
             sized.sample()?;
             reference.sample()?;
@@ -146,8 +157,9 @@ pub(super) fn case_attach(
     let reference_what = format!(
         "reference: the same with the writer's layer bound at {REFERENCE_MAX_LAYERS} (every writer's bound before it was sized from the scene); samples alternate with the row above"
     );
-    Ok(vec![
-        sized.finish(ctx, case, what, layers),
-        reference.finish(ctx, &format!("{case}_bound512"), &reference_what, layers),
-    ])
+    let mut rows = vec![sized.finish(ctx, case, what, layers)];
+    if let Some(reference) = reference {
+        rows.push(reference.finish(ctx, &format!("{case}_bound512"), &reference_what, layers));
+    }
+    Ok(rows)
 }
