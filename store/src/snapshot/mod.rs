@@ -48,7 +48,7 @@ pub use chunk::{
     TREE_CHUNK_MIN_POINTS, TreeChunkSource, chunk_segment_id, is_chunk_segment_id,
     is_tree_chunk_segment_id, tree_chunk_segment_id,
 };
-pub use chunk_state::PublishedLayer;
+pub use chunk_state::{ChunkShape, PublishedLayer};
 pub use file::{FILE_MAGIC, SnapshotFile};
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
