@@ -390,9 +390,7 @@ fn refresh_entry(entry: &mut ManifestLayer, cache: &FxHashMap<LayerId, Box<Cache
 
 /// The chunk segments a cached layer publishes (none unless it is in published form).
 fn published_chunks(c: &Cached) -> usize {
-    PublishedLayer::new(&c.segment, &c.chunks)
-        .chunk_shape()
-        .segments()
+    PublishedLayer::new(&c.segment, &c.chunks).chunk_segments()
 }
 
 fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {

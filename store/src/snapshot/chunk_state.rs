@@ -307,15 +307,8 @@ pub struct PublishedLayer<'c> {
 pub struct ChunkShape {
     /// Point chunks.
     pub point_chunks: usize,
-    /// Slots of the tree chunks, ascending.
-    pub tree_slots: Vec<usize>,
-}
-
-impl ChunkShape {
-    /// Chunk segments in all.
-    pub fn segments(&self) -> usize {
-        self.point_chunks + self.tree_slots.len()
-    }
+    /// Segment ids of the tree chunks, ascending.
+    pub tree_chunks: Vec<u32>,
 }
 
 impl<'c> PublishedLayer<'c> {
@@ -368,20 +361,16 @@ impl<'c> PublishedLayer<'c> {
 
     /// The chunk segments the layer publishes beside its layer segment.
     pub fn chunk_shape(&self) -> ChunkShape {
-        let base = self
-            .segment
-            .layer_index
-            .as_ref()
-            .is_some_and(|i| i.tree_chunk.is_some())
-            && self.tree.is_some();
         ChunkShape {
             point_chunks: self.segment.point_chunks.len(),
-            tree_slots: base
-                .then_some(0)
-                .into_iter()
-                .chain(self.node_trees.iter().map(|(i, _)| 1 + i))
-                .collect(),
+            tree_chunks: self.tree_chunks().map(|(id, _, _)| id).collect(),
         }
+    }
+
+    /// How many chunk segments the layer publishes beside its layer segment (the count of
+    /// [`PublishedLayer::chunk_shape`], without collecting it).
+    pub fn chunk_segments(&self) -> usize {
+        self.segment.point_chunks.len() + self.tree_chunks().count()
     }
 
     /// The layer's point chunks: `(segment id, generation)` each, in column order (none
