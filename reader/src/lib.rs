@@ -28,6 +28,7 @@
 //!   in `bench/results/store.md`.
 #![warn(missing_docs)]
 
+mod join_memo;
 mod scene;
 
 #[doc(inline)]

@@ -19,14 +19,15 @@
     reason = "re-deriving archives from bytes validated by this module"
 )]
 
+use crate::join_memo::JoinMemo;
 use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, chunk_unchecked, is_chunk_segment_id, is_tree_chunk_segment_id,
-    layer_unchecked, manifest_unchecked, tree_chunk_unchecked, validate_chunk, validate_layer,
-    validate_manifest, validate_tree_chunk,
+    ArchivedScene, KnownParts, SegmentBytes, chunk_unchecked, is_chunk_segment_id,
+    is_tree_chunk_segment_id, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
+    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -103,9 +104,11 @@ impl SceneSnapshot {
     /// The scene as a [`ygg_store::SceneView`]: every query of the store runs on it.
     pub fn view(&self) -> ArchivedScene<'_> {
         // SAFETY: a `SceneSnapshot` is only built by `SceneReader::accept`, after the
-        // manifest bytes and every layer's bytes of `self.inner` passed
-        // `validate_manifest` / `validate_layer` (cached per identical address, length and
-        // identity). `self.inner` keeps those exact samples mapped and unchanged.
+        // manifest bytes of `self.inner` passed `validate_manifest` (or were found equal
+        // to validated ones but for integer fields, `CheckedManifest::same_structure`)
+        // and every layer's bytes passed `validate_layer` (cached per identical address,
+        // length and identity). `self.inner` keeps those exact samples mapped and
+        // unchanged.
         let (manifest, segments) = self.bytes();
         // SAFETY: see above; in copy mode the bytes are the private copies that were
         // validated, which nothing but this reader can reach.
@@ -128,7 +131,7 @@ impl SceneSnapshot {
             // SAFETY: as above, each tree chunk's bytes passed `validate_tree_chunk`.
             .map(|bytes| unsafe { tree_chunk_unchecked(bytes) })
             .collect();
-        // `accept` ran `ArchivedScene::new` on this cut.
+        // `accept` joined this cut (`ArchivedScene::rejoin`).
         ArchivedScene::new_prechecked(manifest, layers, chunks, trees)
     }
 
@@ -158,6 +161,8 @@ pub struct SceneReader {
     /// In copy mode: each layer's private copy.
     copies: Option<HashMap<u32, LayerCopy>>,
     current: Option<SceneSnapshot>,
+    /// What the current snapshot's join lets the next one skip.
+    memo: JoinMemo,
     validations: u64,
 }
 
@@ -219,6 +224,7 @@ impl SceneReaderBuilder {
             validated: Vec::new(),
             copies: self.copy_segments.then(HashMap::new),
             current: None,
+            memo: JoinMemo::default(),
             validations: 0,
         })
     }
@@ -304,9 +310,16 @@ impl SceneReader {
             generation: snap.generation(),
             source,
         };
-        let (manifest, segment_bytes) = accepted.bytes();
-        let manifest = validate_manifest(manifest, "manifest").map_err(invalid)?;
+        let (manifest_bytes, segment_bytes) = accepted.bytes();
+        let (manifest, same_structure) = match self.memo.same_structure(manifest_bytes) {
+            Some(m) => (m, true),
+            None => (
+                validate_manifest(manifest_bytes, "manifest").map_err(invalid)?,
+                false,
+            ),
+        };
         let mut layers = Vec::with_capacity(snap.layer_count());
+        let mut known_layers = Vec::with_capacity(snap.layer_count());
         let mut chunks = Vec::new();
         let mut trees = Vec::new();
         let mut identities = Vec::with_capacity(snap.layer_count());
@@ -361,6 +374,13 @@ impl SceneReader {
                     reason: "a layer segment listed after point chunks".into(),
                 }));
             } else {
+                known_layers.push(
+                    known
+                        && manifest
+                            .layers
+                            .get(layers.len())
+                            .is_some_and(|m| self.memo.knows_layer(m, entry.layer_id)),
+                );
                 layers.push(if known {
                     // SAFETY: these exact bytes (same address, length and identity) passed
                     // `validate_layer` earlier, and the transport never changes a
@@ -373,12 +393,22 @@ impl SceneReader {
             newly += usize::from(!known);
             identities.push((entry.layer_id, identity));
         }
-        ArchivedScene::new(manifest, layers, chunks, trees).map_err(|reason| {
+        let known = KnownParts {
+            structure: same_structure,
+            layers: &known_layers,
+        };
+        ArchivedScene::rejoin(manifest, layers, chunks, trees, known).map_err(|reason| {
             invalid(SnapshotError::Inconsistent {
                 what: "snapshot".into(),
                 reason,
             })
         })?;
+        self.memo.remember(
+            manifest_bytes,
+            manifest,
+            same_structure,
+            identities.iter().map(|(id, _)| *id),
+        );
         self.validations += newly as u64;
         self.validated = identities;
         self.current = Some(accepted.clone());

@@ -7,9 +7,9 @@ use ygg_store::index::KdTree;
 use ygg_store::index::SpatialIndex;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::{
-    ArchivedScene, FORMAT_VERSION, LayerSegment, Manifest, PointChunk, PointChunkRef, SegmentBytes,
-    TreeChunk, TreeChunkRef, archive, validate_chunk, validate_layer, validate_manifest,
-    validate_tree_chunk,
+    ArchivedScene, FORMAT_VERSION, KnownParts, LayerSegment, Manifest, PointChunk, PointChunkRef,
+    SegmentBytes, TreeChunk, TreeChunkRef, archive, validate_chunk, validate_layer,
+    validate_manifest, validate_tree_chunk,
 };
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
@@ -219,7 +219,7 @@ fn inconsistent_manifests_are_refused_naming_what_is_wrong() {
     let mut m = g.manifest(1);
     m.layers.swap(0, 1);
     let e = check_cut(&g, &m).unwrap_err();
-    assert!(e.contains("does not match segment"), "{e}");
+    assert!(e.contains("manifest layers are not ascending"), "{e}");
 }
 
 /// The sample scene's segments with every layer's point column split into chunks of 4
@@ -339,6 +339,72 @@ fn inconsistent_point_chunks_are_refused_naming_what_is_wrong() {
     assert!(e.contains("also holds points inline"), "{e}");
     let e = head(|s| s.point_offsets.last_mut().map(|o| *o += 1).unwrap());
     assert!(e.contains("point_offsets"), "{e}");
+}
+
+/// Joins an archived chunked cut as a reader's next cut does (`ArchivedScene::rejoin`),
+/// taking the structure and the layers flagged in `known` as checked; the number of
+/// points the view reads.
+fn rejoin_chunked_cut(
+    manifest: &SegmentBytes,
+    layers: &[SegmentBytes],
+    chunks: &[SegmentBytes],
+    known: &[bool],
+) -> Result<usize, String> {
+    let manifest = validate_manifest(manifest, "manifest").map_err(|e| e.to_string())?;
+    let layers: Vec<_> = layers
+        .iter()
+        .map(|b| validate_layer(b, "layer").unwrap())
+        .collect();
+    let chunks: Vec<_> = chunks
+        .iter()
+        .map(|b| validate_chunk(b, "chunk").unwrap())
+        .collect();
+    let known = KnownParts {
+        structure: true,
+        layers: known,
+    };
+    let view = ArchivedScene::rejoin(manifest, layers, chunks, Vec::new(), known)?;
+    Ok(view
+        .layers()
+        .flat_map(|l| view.layer_nodes(l))
+        .map(|n| view.points(n).len())
+        .sum())
+}
+
+#[test]
+fn a_rejoin_reads_chunks_past_known_layers_and_refuses_one_given_for_a_known_layer() {
+    let g = sample_scene();
+    let cut = chunked_cut(&g);
+    let chunked: Vec<bool> = cut.1.iter().map(|s| !s.point_chunks.is_empty()).collect();
+    assert_eq!(
+        chunked,
+        [false, false, true],
+        "only the objects layer is chunked"
+    );
+    let (m, l, c) = archive_cut(&cut);
+    // The building and rooms layers known, as a reader knows unchanged chunkless layers.
+    let known = [true, true, false];
+    assert_eq!(rejoin_chunked_cut(&m, &l, &c, &known), Ok(30));
+    assert_eq!(rejoin_chunked_cut(&m, &l, &c, &[]), Ok(30), "nothing known");
+
+    // A chunk given for the rooms layer, which names none: refused whether it comes
+    // before the objects layer's chunks or after them.
+    let rooms = g.layer_by_name("rooms").unwrap();
+    let stray = archive(&PointChunk::new(rooms, 0, cut.1[1].generation, &[[0.0; 3]]));
+    let mut before = vec![stray.clone()];
+    before.extend(c.iter().cloned());
+    let e = rejoin_chunked_cut(&m, &l, &before, &known).unwrap_err();
+    assert!(
+        e.contains("where layer") && e.contains("names chunk 0"),
+        "{e}"
+    );
+    let mut after = c.clone();
+    after.push(stray);
+    let e = rejoin_chunked_cut(&m, &l, &after, &known).unwrap_err();
+    assert!(
+        e.contains("1 point chunks given that no layer names"),
+        "{e}"
+    );
 }
 
 /// Damages `b` at a random place: one bit flipped, or a 4-byte word overwritten with

@@ -11,7 +11,7 @@ use ygg_dsg::layout;
 use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
 use ygg_store::snapshot::is_chunk_segment_id;
-use ygg_store::{SceneView, Scope};
+use ygg_store::{LayerId, NodeId, SceneGraph, SceneView, Scope};
 use ygg_testkit::{Proc, TestScene, Watchdog};
 use ygg_transport::PublisherBuilder;
 
@@ -79,7 +79,7 @@ fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
         for c in [[5.0f32, 5.0, 1.0], [20.0, 12.0, 0.5], [33.0, 20.0, 2.0]] {
             let indexed =
                 query::nearest_nodes(&view, Scope::Layer(mesh), c, 3).expect("valid query");
-            let mut brute: Vec<(ygg_store::NodeId, f32)> = view
+            let mut brute: Vec<(NodeId, f32)> = view
                 .layer_nodes(mesh)
                 .filter_map(|n| {
                     let d = view
@@ -140,9 +140,9 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
         .iceoryx_prefix(&scene.prefix)
         .create()
         .expect("writer");
-    let mut g = ygg_store::SceneGraph::new();
+    let mut g = SceneGraph::new();
     let rooms = g.add_layer("rooms").expect("layer");
-    g.add_node(ygg_store::NodeId(1), rooms).expect("node");
+    g.add_node(NodeId(1), rooms).expect("node");
     let segment = g.layer_segment(rooms);
     let len = segment.archived_len();
     // A layer whose archive is damaged after the transport header (which stays valid).
@@ -188,6 +188,104 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
     scene.assert_no_leftovers(Duration::from_secs(5));
 }
 
+/// Publishes `layer`'s segment of `g` as it is now.
+fn publish_segment(
+    publisher: &mut ygg_transport::SegmentPublisher,
+    g: &SceneGraph,
+    layer: LayerId,
+) {
+    let segment = g.layer_segment(layer);
+    let generation = g.layer_generation(layer).expect("layer generation");
+    publisher
+        .publish_layer(layer.0, generation, segment.archived_len(), |buf| {
+            segment.archive_into(buf).expect("fits");
+        })
+        .expect("publish layer");
+}
+
+/// Publishes `g`'s manifest at `generation`, changed by `tamper` first.
+fn publish_cut(
+    publisher: &mut ygg_transport::SegmentPublisher,
+    g: &SceneGraph,
+    generation: u64,
+    tamper: impl FnOnce(&mut ygg_store::snapshot::Manifest),
+) {
+    let mut manifest = g.manifest(generation);
+    tamper(&mut manifest);
+    let entries: Vec<_> = manifest
+        .layers
+        .iter()
+        .map(|e| ygg_transport::ManifestEntry {
+            layer_id: e.id,
+            generation: e.generation,
+        })
+        .collect();
+    publisher
+        .publish_manifest(generation, &entries, manifest.archived_len(), |buf| {
+            manifest.archive_into(buf).expect("fits");
+        })
+        .expect("publish manifest");
+}
+
+#[test]
+fn a_cut_that_lies_about_an_unchanged_layer_is_refused_and_the_last_one_kept() {
+    // A reader checks in full only what changed since its last cut; a manifest that
+    // changes an unchanged layer's node count (its bytes the same as before) must not
+    // slip through as "known".
+    let scene = TestScene::new("lying-cut");
+    let mut publisher = PublisherBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .create()
+        .expect("writer");
+    let mut g = SceneGraph::new();
+    let rooms = g.add_layer("rooms").expect("layer");
+    let objects = g.add_layer("objects").expect("layer");
+    g.add_layer_edge(rooms, objects).expect("edge");
+    g.add_node(NodeId(1), rooms).expect("node");
+    g.add_node(NodeId(10), objects).expect("node");
+    publish_segment(&mut publisher, &g, rooms);
+    publish_segment(&mut publisher, &g, objects);
+    publish_cut(&mut publisher, &g, 1, |_| ());
+    let mut reader = attach(&scene);
+    assert_eq!(snapshot_after(&mut reader, 1).generation(), 1);
+
+    // An honest cut: only the objects layer changed.
+    g.add_node(NodeId(11), objects).expect("node");
+    publish_segment(&mut publisher, &g, objects);
+    publish_cut(&mut publisher, &g, 2, |_| ());
+    let second = snapshot_after(&mut reader, 2);
+    assert_eq!(second.view().layer_nodes(objects).count(), 2);
+
+    // The rooms layer unchanged, its manifest entry claiming another node count.
+    publish_cut(&mut publisher, &g, 3, |m| m.layers[0].node_count = 2);
+    let until = Instant::now() + STEP;
+    let err = loop {
+        match reader.wait_next(Duration::from_millis(200)) {
+            Err(e) => break e,
+            Ok(Some(s)) if s.generation() >= 3 => panic!("a lying cut was accepted"),
+            Ok(_) => assert!(Instant::now() < until, "no cut 3 arrived"),
+        }
+    };
+    assert!(
+        matches!(err, SceneReceiveError::Invalid { generation: 3, .. })
+            && err.to_string().contains("does not match segment"),
+        "{err}"
+    );
+    assert_eq!(
+        second.view().layer_nodes(objects).count(),
+        2,
+        "cut 2 still answers"
+    );
+
+    // The next honest cut is accepted again.
+    publish_cut(&mut publisher, &g, 4, |_| ());
+    let fourth = snapshot_after(&mut reader, 4);
+    assert_eq!(fourth.view().layer_nodes(rooms).count(), 1);
+    assert_eq!(fourth.view().layer_nodes(objects).count(), 2);
+    drop((second, fourth, reader, publisher));
+    scene.assert_no_leftovers(Duration::from_secs(5));
+}
+
 #[test]
 fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
     let scene = TestScene::new("demo");
@@ -228,7 +326,7 @@ fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
 fn a_scene_growing_past_its_writers_layer_bound_is_refused_and_kept() {
     let scene = TestScene::new("bound");
     let _watchdog = Watchdog::new(WATCHDOG);
-    let mut graph = ygg_store::SceneGraph::new();
+    let mut graph = SceneGraph::new();
     graph.add_layer("rooms").expect("layer");
     let mut writer = ygg_writer::SceneWriter::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)

@@ -61,6 +61,10 @@ pub struct LadderArgs {
     /// updates (see `reader_cpu`), and print it.
     #[arg(long)]
     pub reader_cpu: Option<usize>,
+    /// With `--reader-cpu`: the office split into this many rooms (103 is the ipc
+    /// bench's many-layer office) instead of its 9.
+    #[arg(long, requires = "reader_cpu")]
+    pub rooms: Option<usize>,
 }
 
 /// Runs the ladder and writes its report.
@@ -69,7 +73,7 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         return writer_ticks::run(args.scale, ticks);
     }
     if let Some(updates) = args.reader_cpu {
-        return reader_cpu::run(args.scale, updates);
+        return reader_cpu::run(args.scale, args.rooms, updates);
     }
     let (per_room, reps) = if args.quick {
         (args.per_room.min(16), 1)

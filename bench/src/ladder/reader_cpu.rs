@@ -53,13 +53,20 @@ fn read(scene: &str, updates: usize, got: &mpsc::Sender<u64>) -> Result<Vec<f64>
     Ok(cpu)
 }
 
-/// Runs `updates` single-layer updates on the office (`scale`) and prints the reader's
-/// CPU per update.
+/// Runs `updates` single-layer updates on the office (`scale`, split into `rooms` rooms
+/// if given) and prints the reader's CPU per update.
 ///
 /// # Errors
 /// The transport failing, the reader failing or answering a stale generation.
-pub fn run(scale: f64, updates: usize) -> Result<(), Box<dyn std::error::Error>> {
-    let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams { seed: 7, scale });
+pub fn run(
+    scale: f64,
+    rooms: Option<usize>,
+    updates: usize,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let mut dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams { seed: 7, scale });
+    if let Some(rooms) = rooms {
+        dsg = ygg_dsg::office::split_rooms(&dsg, rooms)?;
+    }
     let g = layout::build(&dsg, Layout::Mint)?;
     let agents = layout::layer_with_role(&g, LayerRole::Agents).ok_or("no agents layer")?;
     let pose = g
@@ -67,6 +74,7 @@ pub fn run(scale: f64, updates: usize) -> Result<(), Box<dyn std::error::Error>>
         .map(|n| g.node_id(n))
         .max()
         .ok_or("no agent pose")?;
+    let layer_count = g.layers().count();
     let scene = format!("ladder-reader-cpu-{}", std::process::id());
     let mut writer = SceneWriter::builder(&scene).max_readers(2).create(g)?;
     writer.publish()?;
@@ -104,7 +112,8 @@ pub fn run(scale: f64, updates: usize) -> Result<(), Box<dyn std::error::Error>>
     let (median, p99) = ygg_testkit::stats::median_p99_us(&samples);
     let mean = samples.iter().sum::<f64>() / samples.len().max(1) as f64 / 1e3;
     println!(
-        "reader CPU per single-layer update (AGENTS, {:.0} KB sent per update incl. manifest), {} updates: median {median:.1} µs, p99 {p99:.1} µs, mean {mean:.1} µs",
+        "reader CPU per single-layer update ({} layers, AGENTS, {:.0} KB sent per update incl. manifest), {} updates: median {median:.1} µs, p99 {p99:.1} µs, mean {mean:.1} µs",
+        layer_count,
         bytes as f64 / 1e3,
         samples.len()
     );

@@ -27,6 +27,7 @@ use super::archive::StringTable;
 use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
 use super::index_patch::{PointChanges, update_layer_index};
+use super::rejoin::cut_field_offsets;
 use super::schema::{ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT};
 use crate::bytes::{SegmentBytes, archive};
 use crate::change::LayerChanges;
@@ -103,21 +104,7 @@ impl ManifestBytes {
         let bytes = archive(manifest);
         let archived = rkyv::access::<ArchivedManifest, rkyv::rancor::Error>(&bytes)
             .expect("a manifest archived just now is valid");
-        let base = bytes.as_ptr().addr();
-        let at = |field: &rkyv::rend::u64_le| std::ptr::from_ref(field).addr() - base;
-        let generation = at(&archived.generation);
-        let layers = archived
-            .layers
-            .iter()
-            .map(|l| {
-                [
-                    at(&l.generation),
-                    at(&l.node_count),
-                    at(&l.min_id),
-                    at(&l.max_id),
-                ]
-            })
-            .collect();
+        let (generation, layers) = cut_field_offsets(archived, bytes.as_ptr().addr());
         ManifestBytes {
             bytes,
             generation,

@@ -82,6 +82,14 @@ pub fn is_tree_chunk_segment_id(id: u32) -> bool {
     is_chunk_segment_id(id) && id & TREE_CHUNK_BIT != 0
 }
 
+/// The layer whose point or tree chunk a segment id names (`None` for a layer's or the
+/// manifest's id).
+pub fn chunk_segment_layer(id: u32) -> Option<LayerId> {
+    is_chunk_segment_id(id).then_some(LayerId(
+        (id & !(CHUNK_ID_BIT | TREE_CHUNK_BIT)) >> CHUNK_INDEX_BITS,
+    ))
+}
+
 /// Whether a layer with `points` points is published in chunks of `chunk_len`: when it
 /// has more than one chunk's worth and its chunks fit the segment ids.
 pub(crate) fn is_chunked(layer: LayerId, points: usize, chunk_len: usize) -> bool {
@@ -434,5 +442,19 @@ mod tests {
         assert_eq!(chunk_segment_id(LayerId(CHUNKABLE_LAYERS), 0), None);
         let last = chunk_segment_id(LayerId(CHUNKABLE_LAYERS - 1), MAX_CHUNKS_PER_LAYER - 1);
         assert!(last.is_some_and(|id| id != u32::MAX));
+    }
+
+    #[test]
+    fn a_chunk_segment_id_names_its_layer() {
+        for layer in [0, 1, 77, CHUNKABLE_LAYERS - 1] {
+            for place in [0, 5, MAX_CHUNKS_PER_LAYER - 1] {
+                let point = chunk_segment_id(LayerId(layer), place).unwrap();
+                let tree = tree_chunk_segment_id(LayerId(layer), place).unwrap();
+                assert_eq!(chunk_segment_layer(point), Some(LayerId(layer)));
+                assert_eq!(chunk_segment_layer(tree), Some(LayerId(layer)));
+            }
+        }
+        assert_eq!(chunk_segment_layer(MAX_LAYER_ID), None);
+        assert_eq!(chunk_segment_layer(u32::MAX), None);
     }
 }

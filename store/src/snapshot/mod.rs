@@ -28,7 +28,8 @@
 //! `schema` (the archived types), `archive` (archiving the live graph), `by_parent`
 //! (the rows-by-parent column), `cache` (incremental segments for a publishing writer), `index_patch` (its patched layer
 //! indexes), `file` (`.ygg` files), `validate`
-//! (checking untrusted bytes), `view` ([`ArchivedScene`]).
+//! (checking untrusted bytes), `rejoin` (what a reader need not check again in its next
+//! cut), `view` ([`ArchivedScene`]).
 
 mod archive;
 mod by_parent;
@@ -37,6 +38,7 @@ mod chunk;
 mod chunk_state;
 mod file;
 mod index_patch;
+mod rejoin;
 mod schema;
 mod validate;
 mod view;
@@ -45,11 +47,12 @@ pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
 pub use chunk::{
     MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, PointChunkSource,
-    TREE_CHUNK_MIN_POINTS, TreeChunkSource, chunk_segment_id, is_chunk_segment_id,
-    is_tree_chunk_segment_id, tree_chunk_segment_id,
+    TREE_CHUNK_MIN_POINTS, TreeChunkSource, chunk_segment_id, chunk_segment_layer,
+    is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
 };
 pub use chunk_state::{ChunkShape, PublishedLayer};
 pub use file::{FILE_MAGIC, SnapshotFile};
+pub use rejoin::{CheckedManifest, KnownParts};
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
     ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, ArchivedTreeChunk,

@@ -503,13 +503,16 @@ pub unsafe fn tree_chunk_unchecked(bytes: &[u8]) -> &ArchivedTreeChunk {
     unsafe { rkyv::access_unchecked::<ArchivedTreeChunk>(bytes) }
 }
 
-/// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.
+/// Re-derives a manifest from bytes that [`validate_manifest`] (or
+/// [`CheckedManifest::same_structure`](super::CheckedManifest::same_structure)) accepted
+/// before.
 ///
 /// # Safety
 /// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
-/// an earlier call of [`validate_manifest`] accepted.
+/// an earlier call of [`validate_manifest`] or of `same_structure` accepted.
 pub unsafe fn manifest_unchecked(bytes: &[u8]) -> &ArchivedManifest {
-    // SAFETY: the caller guarantees that `validate_manifest` accepted these very bytes
-    // and that they have not changed since.
+    // SAFETY: the caller guarantees that `validate_manifest` or `same_structure` (which
+    // finds them equal to validated bytes but for integer fields) accepted these very
+    // bytes and that they have not changed since.
     unsafe { rkyv::access_unchecked::<ArchivedManifest>(bytes) }
 }

@@ -1,6 +1,7 @@
 //! [`ArchivedScene`]: the [`SceneView`] over validated archived bytes.
 
 use super::chunk::{check_chunk_matches, check_tree_chunk_matches, chunk_points};
+use super::rejoin::KnownParts;
 use super::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk,
     ArchivedTreeChunkRef, NO_PARENT, u32s, u64s,
@@ -92,6 +93,36 @@ fn rows_under(seg: &ArchivedLayerSegment, parent: u64) -> &[u32] {
     &by_parent[start..start + len]
 }
 
+/// Checks what a manifest's bytecheck does not and depends on nothing but its structure:
+/// layer ids ascending, DAG edges and term lists naming listed layers, the DAG itself.
+fn check_structure(manifest: &ArchivedManifest) -> Result<(), String> {
+    let ids = manifest.layers.iter().map(|m| m.id.to_native());
+    if ids.clone().zip(ids.skip(1)).any(|(a, b)| a >= b) {
+        return Err("manifest layers are not ascending".into());
+    }
+    // Ascending (checked above): each id is found in a table or by binary search.
+    let positions = LayerPositions::new(manifest);
+    let known = |ids: &ArchivedVec<rkyv::rend::u32_le>| {
+        u32s(ids).iter().all(|&id| positions.get(id).is_some())
+    };
+    for m in manifest.layers.iter() {
+        if !known(&m.parents) || !known(&m.children) {
+            return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
+        }
+    }
+    check_dag(manifest, &positions)?;
+    for ls in manifest
+        .label_layers
+        .values()
+        .chain(manifest.key_layers.values())
+    {
+        if !known(ls) {
+            return Err("graph index names an unknown layer".into());
+        }
+    }
+    Ok(())
+}
+
 /// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ArchivedNodeRef {
@@ -114,6 +145,23 @@ impl<'a> ArchivedScene<'a> {
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Result<Self, String> {
+        Self::rejoin(manifest, layers, chunks, trees, KnownParts::NONE)
+    }
+
+    /// [`ArchivedScene::new`] for a reader's next cut: checks what `known` does not say
+    /// an earlier join of the same reader accepted (the manifest's structure; per layer,
+    /// its entry against its segment and its chunks), so that a cut in which one layer
+    /// changed costs O(layers) reads of the manifest, not of every segment.
+    ///
+    /// # Errors
+    /// A description of the first mismatch.
+    pub fn rejoin(
+        manifest: &'a ArchivedManifest,
+        layers: Vec<&'a ArchivedLayerSegment>,
+        chunks: Vec<&'a ArchivedPointChunk>,
+        trees: Vec<&'a ArchivedTreeChunk>,
+        known: KnownParts<'_>,
+    ) -> Result<Self, String> {
         if manifest.layers.len() != layers.len() {
             return Err(format!(
                 "manifest lists {} layers, {} segments given",
@@ -121,47 +169,30 @@ impl<'a> ArchivedScene<'a> {
                 layers.len()
             ));
         }
+        if !known.structure {
+            check_structure(manifest)?;
+        }
         for (i, (m, l)) in manifest.layers.iter().zip(&layers).enumerate() {
-            if m.id != l.layer
-                || m.generation != l.generation
-                || m.node_count.to_native() != l.ids.len() as u64
+            if !known.layer(i)
+                && (m.id != l.layer
+                    || m.generation != l.generation
+                    || m.node_count.to_native() != l.ids.len() as u64)
             {
                 return Err(format!(
                     "manifest entry {i} (layer {}, generation {}) does not match segment (layer {}, generation {})",
                     m.id, m.generation, l.layer, l.generation
                 ));
             }
-            if i > 0 && manifest.layers[i - 1].id >= m.id {
-                return Err("manifest layers are not ascending".into());
-            }
         }
-        // Ascending (checked above): each id is found in a table or by binary search.
-        let positions = LayerPositions::new(manifest);
-        let known = |ids: &ArchivedVec<rkyv::rend::u32_le>| {
-            u32s(ids).iter().all(|&id| positions.get(id).is_some())
-        };
-        for m in manifest.layers.iter() {
-            if !known(&m.parents) || !known(&m.children) {
-                return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
-            }
-        }
-        check_dag(manifest, &positions)?;
-        for ls in manifest
-            .label_layers
-            .values()
-            .chain(manifest.key_layers.values())
-        {
-            if !known(ls) {
-                return Err("graph index names an unknown layer".into());
-            }
-        }
+        // A known layer named no chunk: a chunk given for it is refused below, as the
+        // chunk of another layer or as one that no layer names.
         let mut next = chunks.iter();
-        for l in &layers {
+        for (i, l) in layers.iter().enumerate().filter(|(i, _)| !known.layer(*i)) {
             for (index, r) in l.point_chunks.iter().enumerate() {
                 let chunk = next.next().ok_or_else(|| {
                     format!("layer {} names point chunk {index}, not given", l.layer)
                 })?;
-                check_chunk_matches(chunk, l.layer.to_native(), index, r)?;
+                check_chunk_matches(chunk, manifest.layers[i].id.to_native(), index, r)?;
             }
         }
         if next.next().is_some() {
@@ -171,8 +202,8 @@ impl<'a> ArchivedScene<'a> {
             ));
         }
         let mut next = trees.iter();
-        for l in &layers {
-            let layer = l.layer.to_native();
+        for (i, l) in layers.iter().enumerate().filter(|(i, _)| !known.layer(*i)) {
+            let layer = manifest.layers[i].id.to_native();
             let mut expect = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
                 let tree = next
                     .next()
@@ -210,15 +241,20 @@ impl<'a> ArchivedScene<'a> {
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Self {
+        // The join checked that the chunks come in layer order, each layer's own: where a
+        // layer's chunks start follows from the chunks' layer ids, without reading every
+        // layer segment.
         let mut chunk_start = Vec::new();
         if !chunks.is_empty() {
             chunk_start.reserve(layers.len() + 1);
             let mut at = 0;
-            for l in &layers {
-                chunk_start.push(at);
-                at += l.point_chunks.len() as u32;
+            for m in manifest.layers.iter() {
+                chunk_start.push(at as u32);
+                while chunks.get(at).is_some_and(|c| c.layer == m.id) {
+                    at += 1;
+                }
             }
-            chunk_start.push(at);
+            chunk_start.push(at as u32);
         }
         // The join checked each tree chunk's layer and slot against the index naming it.
         let index_trees = trees
