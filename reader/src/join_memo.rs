@@ -5,14 +5,15 @@ use ygg_store::snapshot::{
 };
 
 /// What the last cut a [`crate::SceneReader`] accepted lets it skip in the next one: its
-/// manifest, whose structure was checked, and the layers that named no chunk, with the
-/// generation and node count their entries had.
+/// manifest, whose structure was checked, and per manifest position the layer's id,
+/// generation and node count if it named no chunk.
 #[derive(Debug, Default)]
 pub(crate) struct JoinMemo {
     manifest: Option<CheckedManifest>,
-    /// `(layer id, generation, node count)` of each layer of the last accepted cut that
-    /// named no point or tree chunk, ascending by id.
-    plain_layers: Vec<(u32, u64, u64)>,
+    /// Per position in the last accepted manifest: `(layer id, generation, node count)`
+    /// of a layer that named no point or tree chunk, `None` for one that did. A manifest
+    /// of the same structure lists the same layers at the same positions.
+    plain_layers: Vec<Option<(u32, u64, u64)>>,
 }
 
 impl JoinMemo {
@@ -22,20 +23,22 @@ impl JoinMemo {
         self.manifest.as_ref()?.same_structure(bytes)
     }
 
-    /// Whether a join may take the layer of manifest entry `entry` as checked: its
-    /// segment (id `segment_id`, bytes the caller found to be the same as in the last
-    /// accepted cut) had this id, generation and node count there and named no chunk.
-    pub(crate) fn knows_layer(&self, entry: &ArchivedManifestLayer, segment_id: u32) -> bool {
-        let id = entry.id.to_native();
-        id == segment_id
-            && self
-                .plain_layers
-                .binary_search_by_key(&id, |l| l.0)
-                .is_ok_and(|at| {
-                    let (_, generation, nodes) = self.plain_layers[at];
-                    generation == entry.generation.to_native()
-                        && nodes == entry.node_count.to_native()
-                })
+    /// Whether a join may take the layer of manifest entry `entry`, at position `at` of a
+    /// manifest with the structure of the last accepted one, as checked: its segment (id
+    /// `segment_id`, bytes the caller found to be the same as in the last accepted cut)
+    /// had this id, generation and node count there and named no chunk.
+    pub(crate) fn knows_layer(
+        &self,
+        at: usize,
+        entry: &ArchivedManifestLayer,
+        segment_id: u32,
+    ) -> bool {
+        let now = (
+            entry.id.to_native(),
+            entry.generation.to_native(),
+            entry.node_count.to_native(),
+        );
+        now.0 == segment_id && self.plain_layers.get(at) == Some(&Some(now))
     }
 
     /// Remembers an accepted cut: its manifest (read from `bytes`; copied unless its
@@ -55,19 +58,16 @@ impl JoinMemo {
             .collect();
         chunked.sort_unstable();
         chunked.dedup();
+        // Both ascend by id: one walk.
+        let mut chunked = chunked.into_iter().peekable();
         self.plain_layers.clear();
-        self.plain_layers.extend(
-            manifest
-                .layers
-                .iter()
-                .filter(|m| chunked.binary_search(&m.id.to_native()).is_err())
-                .map(|m| {
-                    (
-                        m.id.to_native(),
-                        m.generation.to_native(),
-                        m.node_count.to_native(),
-                    )
-                }),
-        );
+        self.plain_layers.extend(manifest.layers.iter().map(|m| {
+            let id = m.id.to_native();
+            while chunked.next_if(|&c| c < id).is_some() {}
+            chunked
+                .next_if_eq(&id)
+                .is_none()
+                .then(|| (id, m.generation.to_native(), m.node_count.to_native()))
+        }));
     }
 }

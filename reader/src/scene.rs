@@ -374,12 +374,14 @@ impl SceneReader {
                     reason: "a layer segment listed after point chunks".into(),
                 }));
             } else {
+                let at = layers.len();
                 known_layers.push(
                     known
+                        && same_structure
                         && manifest
                             .layers
-                            .get(layers.len())
-                            .is_some_and(|m| self.memo.knows_layer(m, entry.layer_id)),
+                            .get(at)
+                            .is_some_and(|m| self.memo.knows_layer(at, m, entry.layer_id)),
                 );
                 layers.push(if known {
                     // SAFETY: these exact bytes (same address, length and identity) passed
