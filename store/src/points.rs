@@ -103,6 +103,16 @@ impl<'a> Points<'a> {
         inline.into_iter().chain(chunked.into_iter().flatten())
     }
 
+    /// The points as one slice when their column is not chunked: the quick test a scan
+    /// makes before falling back to [`Points::runs`].
+    #[inline]
+    pub(crate) fn unchunked(&self) -> Option<&'a [Point]> {
+        match self.column {
+            PointColumn::Inline(points) => points.get(self.start..self.start + self.len),
+            PointColumn::Chunked { .. } => None,
+        }
+    }
+
     /// The points as one slice, if they lie in one piece.
     pub fn as_slice(&self) -> Option<&'a [Point]> {
         let mut runs = self.runs();

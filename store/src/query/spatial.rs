@@ -17,7 +17,7 @@
 //! on these definitions gets the same answers.
 
 use crate::index::SpatialIndex;
-use crate::{NodeId, Point, SceneView, Scope, distance_squared};
+use crate::{NodeId, Point, Points, SceneView, Scope, distance_squared};
 use rustc_hash::{FxHashMap, FxHashSet};
 
 /// Why a spatial query refused its input. Queries never panic on bad input.
@@ -259,7 +259,10 @@ fn nearest_node<V: SceneView>(view: &V, scope: Scope, c: &Point) -> Option<(f32,
             if view.aabb(n).is_some_and(pruned) {
                 continue;
             }
-            if let Some(d2) = node_distance2(view, n, c) {
+            // The id is read only for a node that can win (ties go to the smaller id).
+            if let Some(d2) = node_distance2(view, n, c)
+                && best.is_none_or(|(bd, _)| d2.total_cmp(&bd).is_le())
+            {
                 offer(&mut best, d2, view.node_id(n));
             }
         }
@@ -293,10 +296,31 @@ fn index_within<I: SpatialIndex>(index: &I, c: &Point, r2: f32, out: &mut Vec<No
 
 /// A node's squared distance to `c` (`None` without points).
 fn node_distance2<'a, V: SceneView>(view: &'a V, n: V::NodeRef<'a>, c: &Point) -> Option<f32> {
-    view.points(n)
-        .iter()
-        .map(|p| distance_squared(p, c))
-        .min_by(f32::total_cmp)
+    points_distance2(view.points(n), c)
+}
+
+/// The smallest squared distance from `points` to `c` (`None` for no points): a plain
+/// loop over each contiguous run.
+#[inline]
+fn points_distance2(points: Points<'_>, c: &Point) -> Option<f32> {
+    let nearest = |run: &[Point]| {
+        run.iter()
+            .map(|p| distance_squared(p, c))
+            .min_by(f32::total_cmp)
+    };
+    match points.unchunked() {
+        Some(run) => nearest(run),
+        None => points.runs().filter_map(nearest).min_by(f32::total_cmp),
+    }
+}
+
+/// Whether a point of `points` lies within squared distance `r2` of `c`.
+fn points_within(points: Points<'_>, c: &Point, r2: f32) -> bool {
+    let any = |run: &[Point]| run.iter().any(|p| distance_squared(p, c) <= r2);
+    match points.unchunked() {
+        Some(run) => any(run),
+        None => points.runs().any(any),
+    }
 }
 
 /// At most `m` nodes in `scope` closest to `c`, with their distances.
@@ -431,7 +455,7 @@ pub fn nodes_within_radius<V: SceneView>(
             if view.aabb(n).is_some_and(|b| b.distance_squared_to(&c) > r2) {
                 continue;
             }
-            if view.points(n).iter().any(|p| distance_squared(p, &c) <= r2) {
+            if points_within(view.points(n), &c, r2) {
                 out.push(view.node_id(n));
             }
         }
