@@ -120,13 +120,16 @@ fn late_joiner_gets_the_current_snapshot_quickly() {
     scene.assert_no_leftovers(STEP);
 }
 
-#[test]
-fn snapshots_are_consistent_cuts_under_fast_publishing() {
-    let scene = TestScene::new("fast");
+/// A writer publishing `layers` synthetic layers of `bytes` bytes at 400 Hz, one layer
+/// changed per cut, and a reader process checking 150 consecutive snapshots: each one a
+/// consistent cut (every segment's bytes those of the generation its entry names), in
+/// increasing generations.
+fn fast_publishing_gives_consistent_cuts(tag: &str, layers: &str, bytes: &str) {
+    let scene = TestScene::new(tag);
     let dog = Watchdog::new(WATCHDOG);
     let mut writer = scene.spawn_writer(
         &[
-            "--layers", "4", "--bytes", "20000", "--rate", "400", "--quiet",
+            "--layers", layers, "--bytes", bytes, "--rate", "400", "--quiet",
         ],
         &dog,
     );
@@ -155,6 +158,18 @@ fn snapshots_are_consistent_cuts_under_fast_publishing() {
     writer.signal(Signal::TERM);
     assert!(writer.wait_exit(STEP).success());
     scene.assert_no_leftovers(STEP);
+}
+
+#[test]
+fn snapshots_are_consistent_cuts_under_fast_publishing() {
+    fast_publishing_gives_consistent_cuts("fast", "4", "20000");
+}
+
+#[test]
+fn cuts_of_many_segments_stay_consistent_under_fast_publishing() {
+    // 70 segments, one changed per cut: the reader assembles each cut from the one
+    // changed segment and 69 it holds already.
+    fast_publishing_gives_consistent_cuts("fast-many", "70", "2000");
 }
 
 #[test]
