@@ -74,6 +74,8 @@ mod service;
 pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
 pub mod test_pattern;
+#[cfg(test)]
+mod test_prefix;
 mod wake;
 
 #[doc(inline)]

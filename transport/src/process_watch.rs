@@ -162,13 +162,14 @@ fn open_matching(details: &NodeDetails) -> Option<OwnedFd> {
 pub(crate) mod tests {
     use super::*;
     use crate::protocol::iceoryx_config;
+    use crate::test_prefix::TestPrefix;
     use iceoryx2::prelude::*;
 
-    /// A node of this process under an iceoryx2 prefix of its own (`prefix` and the pid),
-    /// and its details as iceoryx2 reads them back.
-    pub(crate) fn own_node(prefix: &str) -> (Node<Ipc>, Option<NodeDetails>) {
-        let prefix = format!("ygg_pw_{prefix}_{}_", std::process::id());
-        let config = iceoryx_config(Some(&prefix)).expect("config");
+    /// A node of this process under an iceoryx2 prefix of its own (`tag` and the pid),
+    /// its details as iceoryx2 reads them back, and the prefix (its files go with it).
+    pub(crate) fn own_node(tag: &str) -> (Node<Ipc>, Option<NodeDetails>, TestPrefix) {
+        let prefix = TestPrefix::new(&format!("pw_{tag}"));
+        let config = iceoryx_config(Some(prefix.as_str())).expect("config");
         let node = NodeBuilder::new()
             .config(&config)
             .create::<Ipc>()
@@ -177,19 +178,19 @@ pub(crate) mod tests {
             Ok(Some(NodeState::Alive(view))) => view.details().clone(),
             other => panic!("own node not alive: {other:?}"),
         };
-        (node, details)
+        (node, details, prefix)
     }
 
     #[test]
     fn a_confirmed_node_of_a_running_process_is_watched_and_no_other() {
-        let (node, details) = own_node("a");
+        let (node, details, _prefix) = own_node("a");
         let id = *node.id();
         let mut watch = ProcessWatch::default();
         assert!(!watch.runs(id), "nothing watched yet");
         assert!(open_matching(details.as_ref().expect("details")).is_some());
         watch.confirmed(id, details.as_ref());
         assert!(watch.runs(id), "this process runs");
-        let (other, _) = own_node("b");
+        let (other, _, _other_prefix) = own_node("b");
         assert!(
             !watch.runs(*other.id()),
             "another node is not the one watched"
@@ -202,7 +203,7 @@ pub(crate) mod tests {
 
     #[test]
     fn an_exited_process_no_longer_runs() {
-        let (node, _) = own_node("c");
+        let (node, _, _prefix) = own_node("c");
         let id = *node.id();
         let mut child = std::process::Command::new("sleep")
             .arg("30")
@@ -235,7 +236,7 @@ pub(crate) mod tests {
 
     #[test]
     fn an_answer_older_than_the_confirm_interval_is_asked_again() {
-        let (node, details) = own_node("d");
+        let (node, details, _prefix) = own_node("d");
         let id = *node.id();
         let mut watch = ProcessWatch::default();
         watch.confirmed(id, details.as_ref());

@@ -90,23 +90,26 @@ fn descriptor(listener: &Listener<Ipc>) -> BorrowedFd<'_> {
 mod tests {
     use super::*;
     use crate::protocol::iceoryx_config;
+    use crate::test_prefix::TestPrefix;
     use iceoryx2::prelude::*;
     use rustix::process::{Pid, PidfdFlags, pidfd_open};
     use std::os::fd::AsFd as _;
     use std::time::Instant;
 
-    fn node(tag: &str) -> Node<Ipc> {
-        let prefix = format!("ygg_wk_{tag}_{}_", std::process::id());
-        let config = iceoryx_config(Some(&prefix)).expect("config");
-        NodeBuilder::new()
+    /// A node under a prefix of its own (its files go with the prefix).
+    fn node(tag: &str) -> (Node<Ipc>, TestPrefix) {
+        let prefix = TestPrefix::new(&format!("wk_{tag}"));
+        let config = iceoryx_config(Some(prefix.as_str())).expect("config");
+        let node = NodeBuilder::new()
             .config(&config)
             .create::<Ipc>()
-            .expect("node")
+            .expect("node");
+        (node, prefix)
     }
 
     #[test]
     fn wakes_for_an_event_for_an_exit_and_otherwise_times_out() {
-        let node = node("a");
+        let (node, _prefix) = node("a");
         let service = node
             .service_builder(&"ygg_wk_events".try_into().expect("name"))
             .event()

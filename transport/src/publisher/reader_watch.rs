@@ -70,7 +70,7 @@ mod tests {
 
     #[test]
     fn readers_are_watched_and_forgotten_with_the_stream_subscribers() {
-        let (node, _) = own_node("rw");
+        let (node, _, _prefix) = own_node("rw");
         let config = node.config().clone();
         let id = *node.id();
         let mut watch = ReaderWatch::default();
