@@ -13,7 +13,10 @@
 //!   maps the payload read-only. The writer keeps its read-write mapping, and any process
 //!   of the same user can open a segment file read-write.
 //! * **What validation guarantees.** Every manifest and every newly received layer segment
-//!   passes rkyv's bytecheck and the store's consistency pass before any query touches it:
+//!   passes rkyv's bytecheck and the store's consistency pass before any query touches it
+//!   (a manifest equal byte for byte to the last accepted one but for its per-cut integer
+//!   fields, every value of which is valid, is taken as checked; see
+//!   [`ygg_store::snapshot::CheckedManifest`]):
 //!   whatever bytes were in shared memory at that moment, queries stay in bounds and
 //!   answer on a consistent cut. A corrupt or hostile segment is rejected with
 //!   [`SceneReceiveError::Invalid`]; the previous snapshot stays current.

@@ -5,7 +5,10 @@
 //! validated (rkyv bytecheck plus the store's consistency pass) before any query touches
 //! it. A layer segment is validated once per identity `(session, layer, generation)`;
 //! later snapshots reuse the result only when they hand out the very same bytes (same
-//! address and length, which the transport guarantees for an unchanged layer).
+//! address and length, which the transport guarantees for an unchanged layer). A manifest
+//! that differs from the last accepted one only in its per-cut integers is compared, not
+//! validated again, and the join of the cut re-checks only the layers that changed
+//! ([`crate::join_memo`]).
 //!
 //! Validation is a check at one moment. The reader maps samples read-only, but the
 //! writer keeps its read-write mapping, and any process of the same user can open the

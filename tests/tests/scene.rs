@@ -136,10 +136,7 @@ fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
 #[test]
 fn corrupted_archive_bytes_are_refused_by_the_reader() {
     let scene = TestScene::new("corrupt");
-    let mut publisher = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create()
-        .expect("writer");
+    let mut publisher = raw_publisher(&scene);
     let mut g = SceneGraph::new();
     let rooms = g.add_layer("rooms").expect("layer");
     g.add_node(NodeId(1), rooms).expect("node");
@@ -159,25 +156,9 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
             },
         )
         .expect("publish layer");
-    let manifest = g.manifest(1);
-    let entries = [ygg_transport::ManifestEntry {
-        layer_id: rooms.0,
-        generation: g.layer_generation(rooms).expect("gen"),
-    }];
-    publisher
-        .publish_manifest(1, &entries, manifest.archived_len(), |buf| {
-            manifest.archive_into(buf).expect("fits");
-        })
-        .expect("publish manifest");
+    publish_cut(&mut publisher, &g, 1, |_| ());
     let mut reader = attach(&scene);
-    let until = Instant::now() + STEP;
-    let err = loop {
-        match reader.wait_next(Duration::from_millis(200)) {
-            Err(e) => break e,
-            Ok(Some(_)) => panic!("a damaged archive was accepted"),
-            Ok(None) => assert!(Instant::now() < until, "no snapshot arrived"),
-        }
-    };
+    let err = refused(&mut reader, 1);
     assert!(matches!(err, SceneReceiveError::Invalid { .. }), "{err}");
     assert!(
         err.to_string().contains(&scene.name),
@@ -186,6 +167,28 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
     drop(reader);
     drop(publisher);
     scene.assert_no_leftovers(Duration::from_secs(5));
+}
+
+/// A bare segment publisher for `scene`, to publish segments and manifests by hand.
+fn raw_publisher(scene: &TestScene) -> ygg_transport::SegmentPublisher {
+    PublisherBuilder::new(&scene.name)
+        .iceoryx_prefix(&scene.prefix)
+        .create()
+        .expect("writer")
+}
+
+/// The error `reader` reports for the cut of `generation`, which it must refuse.
+fn refused(reader: &mut SceneReader, generation: u64) -> SceneReceiveError {
+    let until = Instant::now() + STEP;
+    loop {
+        match reader.wait_next(Duration::from_millis(200)) {
+            Err(e) => return e,
+            Ok(Some(s)) if s.generation() >= generation => {
+                panic!("cut {} was accepted", s.generation())
+            }
+            Ok(_) => assert!(Instant::now() < until, "no cut {generation} arrived"),
+        }
+    }
 }
 
 /// Publishes `layer`'s segment of `g` as it is now.
@@ -233,10 +236,7 @@ fn a_cut_that_lies_about_an_unchanged_layer_is_refused_and_the_last_one_kept() {
     // changes an unchanged layer's node count (its bytes the same as before) must not
     // slip through as "known".
     let scene = TestScene::new("lying-cut");
-    let mut publisher = PublisherBuilder::new(&scene.name)
-        .iceoryx_prefix(&scene.prefix)
-        .create()
-        .expect("writer");
+    let mut publisher = raw_publisher(&scene);
     let mut g = SceneGraph::new();
     let rooms = g.add_layer("rooms").expect("layer");
     let objects = g.add_layer("objects").expect("layer");
@@ -258,14 +258,7 @@ fn a_cut_that_lies_about_an_unchanged_layer_is_refused_and_the_last_one_kept() {
 
     // The rooms layer unchanged, its manifest entry claiming another node count.
     publish_cut(&mut publisher, &g, 3, |m| m.layers[0].node_count = 2);
-    let until = Instant::now() + STEP;
-    let err = loop {
-        match reader.wait_next(Duration::from_millis(200)) {
-            Err(e) => break e,
-            Ok(Some(s)) if s.generation() >= 3 => panic!("a lying cut was accepted"),
-            Ok(_) => assert!(Instant::now() < until, "no cut 3 arrived"),
-        }
-    };
+    let err = refused(&mut reader, 3);
     assert!(
         matches!(err, SceneReceiveError::Invalid { generation: 3, .. })
             && err.to_string().contains("does not match segment"),
