@@ -524,6 +524,18 @@ fn manifests_must_name_published_generations() {
     let failed: Result<(), PublishError> =
         writer.try_publish_layer(3, 1, 8, |_| Err::<(), _>("serializer failed"));
     assert!(matches!(failed, Err(PublishError::Fill(_))));
+    // Layers never published, before, between and after published ones.
+    for entries in [[e(0, 1), e(2, 5)], [e(1, 5), e(3, 1)], [e(2, 5), e(9, 1)]] {
+        let unknown = entries.iter().find(|x| x.generation == 1).expect("listed");
+        assert!(matches!(
+            writer.publish_manifest(1, &entries, 0, |_| {}),
+            Err(PublishError::UnknownLayerGeneration {
+                layer_id,
+                published: None,
+                ..
+            }) if layer_id == unknown.layer_id
+        ));
+    }
     writer
         .publish_manifest(1, &[e(1, 5), e(2, 5)], 3, |b| b.copy_from_slice(b"abc"))
         .expect("valid manifest");

@@ -475,8 +475,15 @@ impl SegmentPublisher {
                 });
             }
         }
+        // Both ascend by id (the entries checked above): one walk, not a map lookup per
+        // entry.
+        let mut published = self.published.iter().peekable();
         for entry in entries {
-            let published = self.published.get(&entry.layer_id).copied();
+            while published.next_if(|(id, _)| **id < entry.layer_id).is_some() {}
+            let published = published
+                .peek()
+                .filter(|(id, _)| **id == entry.layer_id)
+                .map(|(_, generation)| **generation);
             if published != Some(entry.generation) {
                 return Err(PublishError::UnknownLayerGeneration {
                     layer_id: entry.layer_id,
