@@ -145,8 +145,10 @@ impl SceneGraph {
     /// Enables the node index of `node`: a kd-tree over every point in its sub-tree,
     /// kept exact as geometry changes below it and as nodes are nested under it or taken
     /// out. [`crate::query::nearest_in_subtree`] and [`crate::query::visible`] use it,
-    /// and snapshots carry it in the segment of `node`'s layer. Enabling an enabled
-    /// index does nothing.
+    /// and snapshots carry it in the segment of `node`'s layer (a publishing writer
+    /// withholds the tree of a sub-tree smaller than
+    /// [`TREE_CHUNK_MIN_POINTS`](crate::snapshot::TREE_CHUNK_MIN_POINTS) points: readers
+    /// walk it). Enabling an enabled index does nothing.
     ///
     /// # Errors
     /// [`GraphEditError::UnknownNode`].
@@ -269,6 +271,11 @@ impl SceneGraph {
     fn index_handle_of(&mut self, id: NodeId) -> u32 {
         let node = self.nodes.get_mut(&id).expect("indexed node exists");
         self.indexes.handle(id, &mut node.index_handle)
+    }
+
+    /// Points in the node index rooted at `root` (0 if there is none), in O(1).
+    pub(crate) fn indexed_points(&self, root: NodeId) -> usize {
+        self.indexes.nodes.get(&root).map_or(0, |tree| tree.len())
     }
 
     /// The nodes with points in `root`'s sub-tree, with their points.

@@ -122,7 +122,8 @@ pub trait SceneView {
         None::<NoIndex>
     }
 
-    /// The index over every point in `node`'s sub-tree, if this view keeps one.
+    /// The index over every point in `node`'s sub-tree, if this view keeps one (a
+    /// published snapshot keeps none for a sub-tree of few points: queries walk it).
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
         let _ = node;
         None::<NoIndex>

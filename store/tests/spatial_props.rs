@@ -458,11 +458,18 @@ fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Prob
             let id = view.node_id(n);
             let live = g.node(id).unwrap();
             assert_eq!(g.points(live), view.points(n));
-            assert_eq!(
+            // A publish withholds node index trees smaller than a tree chunk: the
+            // reader walks those sub-trees (`check_view` compared the answers).
+            match (
                 g.node_index(id).map(|i| i.len()),
                 view.node_index(id).map(|i| i.len()),
-                "node index of {id:?}"
-            );
+            ) {
+                (Some(live), None) => assert!(
+                    live < TREE_CHUNK,
+                    "node index of {id:?}: a tree of {live} points was withheld"
+                ),
+                (live, published) => assert_eq!(live, published, "node index of {id:?}"),
+            }
         }
     }
 }
@@ -481,7 +488,8 @@ fn check_all(
     let archived = snapshot.view();
     check_view(&archived, probes);
     check_reader_indexes(&archived, probes, cache);
-    // The archive carries exactly the indexes the live graph keeps.
+    // The archive carries exactly the indexes the live graph keeps (a node index over
+    // no point reads as none: its sub-tree is walked, finding nothing).
     for l in g.layers() {
         assert_eq!(
             g.layer_index(l).map(|i| i.len()),
@@ -490,7 +498,7 @@ fn check_all(
     }
     for id in scope_nodes(g, Scope::Graph) {
         assert_eq!(
-            g.node_index(id).map(|i| i.len()),
+            g.node_index(id).map(|i| i.len()).filter(|&n| n > 0),
             archived.node_index(id).map(|i| i.len())
         );
     }
@@ -936,4 +944,77 @@ fn a_fold_that_keeps_the_point_count_resends_the_tree_chunk() {
         resent, 1,
         "the tree chunk is resent at the fold, and only then"
     );
+}
+
+/// A publishing writer withholds node index trees smaller than a tree chunk: moving a
+/// small object resends neither its tree nor the large object's tree chunk, answers stay
+/// those of brute force (the sub-tree is walked), and the same cache asked for the layer
+/// inline builds every tree it had left unbuilt.
+#[test]
+fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_segment() {
+    let mut g = SceneGraph::new();
+    let objects = g.add_layer("objects").unwrap();
+    let mesh = g.add_layer("mesh").unwrap();
+    g.add_layer_edge(objects, mesh).unwrap();
+    // Objects 0..6 hold 5 points each (below `TREE_CHUNK`); object 6 holds 40.
+    for i in 0..7u64 {
+        g.add_node(NodeId(i), objects).unwrap();
+        g.add_node(NodeId(100 + i), mesh).unwrap();
+        let k = if i == 6 { 40 } else { 5 };
+        let p = [2 * i as i8 - 6, 0, 0];
+        g.set_geometry(NodeId(100 + i), cluster(&p, k)).unwrap();
+        g.nest(NodeId(i), NodeId(100 + i)).unwrap();
+        g.enable_node_index(NodeId(i)).unwrap();
+    }
+    let probes: Vec<Probe> = (0..6i8)
+        .map(|i| Probe {
+            c: [2 * i - 6, 1, i % 2],
+            m: [1, 3, 8][i as usize % 3],
+            r: i as u8 + 1,
+            dir: [1, 0, 0],
+            half_angle: 30,
+            range: 8,
+        })
+        .collect();
+    let mut publisher = Publisher::new();
+    check_published(&mut g, &mut publisher, &probes);
+    let big_tree = |publisher: &Publisher| {
+        let trees: Vec<(u32, u64)> = publisher
+            .held
+            .iter()
+            .filter(|(id, _)| is_tree_chunk_segment_id(**id))
+            .map(|(id, (generation, _))| (*id, *generation))
+            .collect();
+        assert_eq!(trees.len(), 1, "only the 40-point tree travels: {trees:?}");
+        trees[0]
+    };
+    let first = big_tree(&publisher);
+    let inline_len = archive(&g.layer_segment(objects)).len();
+    for step in 0..6u64 {
+        let p = [2 * step as i8 - 6, 3, 1];
+        g.set_geometry(NodeId(100 + step), cluster(&p, 5)).unwrap();
+        let published = publisher.segments.published_layer(&mut g, objects);
+        let published_len = archive(published.segment).len();
+        assert!(
+            published_len < inline_len,
+            "the published objects layer ({published_len} bytes) carries no small tree (inline: {inline_len} bytes)"
+        );
+        check_published(&mut g, &mut publisher, &probes);
+        assert_eq!(
+            big_tree(&publisher),
+            first,
+            "moving a small object resent the large tree"
+        );
+    }
+    // Inline, the cache's segment has every tree again, as a fresh build does.
+    let fresh = g.layer_segment(objects);
+    let cached = publisher.segments.layer_segment(&mut g, objects);
+    let shape = |s: &ygg_store::snapshot::LayerSegment| -> Vec<(u64, Vec<u64>, usize)> {
+        s.node_indexes
+            .iter()
+            .map(|i| (i.root, i.ids.clone(), i.tree.size()))
+            .collect()
+    };
+    assert_eq!(shape(cached), shape(&fresh));
+    assert_eq!(shape(&fresh)[0].2, 5);
 }

@@ -197,7 +197,11 @@ impl SegmentCache {
     /// # Panics
     /// If `layer` does not exist.
     pub fn layer_segment(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &LayerSegment {
-        &self.update(graph, layer).segment
+        let cached = self.update(graph, layer);
+        cached
+            .chunks
+            .build_stale_node_trees(graph, &mut cached.segment, 0);
+        &cached.segment
     }
 
     /// The layer as a publishing writer sends it: [`SegmentCache::layer_segment`], but a
@@ -215,6 +219,9 @@ impl SegmentCache {
     ) -> PublishedLayer<'_> {
         let (chunk_len, tree_min) = (self.point_chunk_len, self.tree_chunk_min_points);
         let cached = self.update(graph, layer);
+        cached
+            .chunks
+            .build_stale_node_trees(graph, &mut cached.segment, tree_min);
         cached
             .chunks
             .publish_form(&mut cached.segment, chunk_len, tree_min);
@@ -518,8 +525,8 @@ fn patched(
         .retain(|index| removed.binary_search(&NodeId(index.root)).is_err());
     for index in &mut s.node_indexes {
         if roots.binary_search(&NodeId(index.root)).is_ok() {
-            *index = graph.archived_node_index(NodeId(index.root));
-            chunks.node_tree_rebuilt(index.root);
+            // Built when the segment is next asked for, if it is sent at all.
+            chunks.node_tree_stale(index);
         }
     }
     Some(Box::new(Cached {

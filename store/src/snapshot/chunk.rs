@@ -40,7 +40,9 @@ const TREE_CHUNK_BIT: u32 = 1 << 30;
 
 /// Fewest points a kd-tree (a layer index's base tree or a node index's tree) has for a
 /// publishing writer to send it as a [`TreeChunk`](super::TreeChunk) (about 20 KiB
-/// archived); smaller trees stay in their layer segment. Every segment of a cut costs
+/// archived). A smaller layer index tree stays in its layer segment; a smaller node
+/// index tree is withheld (readers walk so small a sub-tree), so that moving one object
+/// does not resend the trees of every object in its layer. Every segment of a cut costs
 /// each reader a receive and a join per cut and a validation at attach: with a bound of
 /// 64 points the office's 213 object trees became chunks and single-layer updates and
 /// attach got slower by more than the bytes they saved (see `bench/results/issue19.md`).

@@ -8,7 +8,7 @@ use super::chunk::{
     PointChunkSource, TreeChunkSource, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
     is_chunked, tree_chunk_segment_id,
 };
-use super::schema::{LayerSegment, PointChunkRef, TreeChunkRef};
+use super::schema::{LayerSegment, NodeIndexSegment, PointChunkRef, TreeChunkRef};
 use crate::index::{KdTree, build_tree};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 use std::ops::Range;
@@ -124,12 +124,16 @@ pub(super) struct ChunkState {
     /// Per node index of the last published segment, by position: its root and its
     /// tree chunk (`None` for a tree kept inline).
     node_refs: Vec<(u64, Option<TreeChunkRef>)>,
-    /// The node indexes' trees that travel as chunks, by position, moved out of the
-    /// segment while it is in published form.
+    /// The node indexes' trees that travel as chunks or are withheld, by position, moved
+    /// out of the segment while it is in published form.
     node_trees_aside: Vec<(usize, KdTree)>,
     /// Roots whose node index tree was built anew since the last publish, among those
     /// whose tree the last publish sent as a chunk.
     node_trees_rebuilt: Vec<u64>,
+    /// Roots of node indexes whose sub-tree changed and whose tree is not built yet
+    /// (empty in the segment): built when the segment is asked for inline, or published
+    /// with a tree of [`ChunkState::publish_form`]'s `tree_min_points` or more.
+    node_trees_stale: Vec<u64>,
     /// Empty trees that stand in for the trees moved aside, kept for reuse: building
     /// one costs about a microsecond, a publish moves a tree per chunked index.
     empty_trees: Vec<KdTree>,
@@ -180,13 +184,51 @@ impl ChunkState {
         }
     }
 
+    /// Empties the node index `index`, whose sub-tree changed: its tree is built by
+    /// [`ChunkState::build_stale_node_trees`] when needed, so a tree a publish would
+    /// withhold is not built at all.
+    pub(super) fn node_tree_stale(&mut self, index: &mut NodeIndexSegment) {
+        self.node_tree_rebuilt(index.root);
+        let empty = self.empty_trees.pop().unwrap_or_else(|| build_tree(&[]));
+        index.tree = empty;
+        index.ids.clear();
+        index.tree_chunk = None;
+        self.node_trees_stale.push(index.root);
+    }
+
+    /// Builds the trees of the stale node indexes of `segment` whose sub-trees hold
+    /// `min_points` points or more (every one for 0); the others stay stale. Roots no
+    /// longer indexed are forgotten.
+    pub(super) fn build_stale_node_trees(
+        &mut self,
+        graph: &SceneGraph,
+        segment: &mut LayerSegment,
+        min_points: usize,
+    ) {
+        self.node_trees_stale.sort_unstable();
+        self.node_trees_stale.dedup();
+        self.node_trees_stale.retain(|&root| {
+            let Ok(at) = segment
+                .node_indexes
+                .binary_search_by_key(&root, |index| index.root)
+            else {
+                return false;
+            };
+            if graph.indexed_points(NodeId(root)) < min_points {
+                return true;
+            }
+            segment.node_indexes[at] = graph.archived_node_index(NodeId(root));
+            false
+        });
+    }
+
     /// Brings the chunks up to date with `segment` and puts it in published form: for a
     /// layer of more than `chunk_len` points its points move aside and `point_chunks`
     /// lists the chunks, each at the generation it last changed (the segment's
     /// generation if it changed since the last publish). A layer index's base tree of
     /// `tree_min_points` or more moves aside too, named by its tree chunk, which keeps
     /// its generation until the tree is built anew; so do node indexes' trees of
-    /// `tree_min_points` or more.
+    /// `tree_min_points` or more, and smaller node index trees are withheld.
     pub(super) fn publish_form(
         &mut self,
         segment: &mut LayerSegment,
@@ -253,7 +295,8 @@ impl ChunkState {
 
     /// The node indexes' part of [`ChunkState::publish_form`]: the tree of node index
     /// `i` travels as tree chunk `1 + i` when it is large enough, and keeps its
-    /// generation while the same root holds the slot and its tree is not built anew.
+    /// generation while the same root holds the slot and its tree is not built anew; a
+    /// smaller tree is withheld (moved aside, not sent).
     fn node_trees_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
         let mut rebuilt = std::mem::take(&mut self.node_trees_rebuilt);
         rebuilt.sort_unstable();
@@ -263,6 +306,14 @@ impl ChunkState {
             let points = index.tree.size();
             if !has_tree_chunk(layer, 1 + i, points, min_points) {
                 self.node_refs.push((index.root, None));
+                if 0 < points && points < min_points {
+                    // Withheld: readers walk a sub-tree this small (`SceneView::node_index`
+                    // gives no index), so moving one object does not resend every
+                    // object tree of its layer.
+                    let empty = self.empty_trees.pop().unwrap_or_else(|| build_tree(&[]));
+                    let tree = std::mem::replace(&mut index.tree, empty);
+                    self.node_trees_aside.push((i, tree));
+                }
                 continue;
             }
             let generation = match old_refs.get(i) {

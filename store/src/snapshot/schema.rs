@@ -7,7 +7,7 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 8;
+pub const FORMAT_VERSION: u32 = 9;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
@@ -179,7 +179,10 @@ pub struct NodeIndexSegment {
     /// position in this table.
     pub ids: Vec<u64>,
     /// A kd-tree over every point in the sub-tree. Empty when the tree travels as a
-    /// [`TreeChunk`] (`tree_chunk`).
+    /// [`TreeChunk`] (`tree_chunk`), and when a publishing writer withheld a tree of
+    /// fewer than [`TREE_CHUNK_MIN_POINTS`](super::TREE_CHUNK_MIN_POINTS) points: readers
+    /// then walk the sub-tree, as for a node without an index (an empty tree without a
+    /// chunk gives no index).
     pub tree: KdTree,
     /// The tree's chunk, when it is published as a segment of its own (by a publishing
     /// writer, for a tree of [`TREE_CHUNK_MIN_POINTS`](super::TREE_CHUNK_MIN_POINTS)

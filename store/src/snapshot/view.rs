@@ -609,6 +609,8 @@ impl SceneView for ArchivedScene<'_> {
         let ni = &seg.node_indexes[at];
         let tree = match ni.tree_chunk.as_ref() {
             Some(_) => self.tree_chunk(seg.layer.to_native(), 1 + at as u32)?,
+            // A publishing writer withholds small trees: the sub-tree is walked instead.
+            None if ni.tree.size() == 0 => return None,
             None => &ni.tree,
         };
         // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
