@@ -165,14 +165,28 @@ fn layer_rows<V: SceneView>(view: &V) -> Vec<LayerRow> {
                 row.edges += view.out_edges(n).count();
                 row.nested += usize::from(view.parent(n).is_some());
                 let id = view.node_id(n);
-                if let Some(i) = view.node_index(id) {
-                    row.node_indexes.push((id, i.len(), i.memory_bytes()));
+                if view.has_node_index(id) {
+                    let (points, bytes) = match view.node_index(id) {
+                        Some(i) => (i.len(), i.memory_bytes()),
+                        // A publish withholds small trees: readers walk the sub-tree.
+                        None => (subtree_points(view, id), 0),
+                    };
+                    row.node_indexes.push((id, points, bytes));
                 }
             }
             row.node_indexes.sort_unstable_by_key(|r| r.0);
             row
         })
         .collect()
+}
+
+/// Points in `root`'s sub-tree.
+fn subtree_points<V: SceneView>(view: &V, root: NodeId) -> usize {
+    ygg_store::query::subtree(view, root)
+        .into_iter()
+        .filter_map(|m| view.node(m))
+        .map(|m| view.points(m).len())
+        .sum()
 }
 
 /// `12,345,678`.

@@ -128,6 +128,12 @@ pub trait SceneView {
         let _ = node;
         None::<NoIndex>
     }
+
+    /// Whether the graph indexes `node`'s sub-tree, whether or not this view carries the
+    /// tree ([`SceneView::node_index`] may give none for a small sub-tree).
+    fn has_node_index(&self, node: NodeId) -> bool {
+        self.node_index(node).is_some()
+    }
 }
 
 /// The index type of views that keep no index (uninhabited).
@@ -259,5 +265,8 @@ impl<V: SceneView + ?Sized> SceneView for &V {
     }
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
         (**self).node_index(node)
+    }
+    fn has_node_index(&self, node: NodeId) -> bool {
+        (**self).has_node_index(node)
     }
 }

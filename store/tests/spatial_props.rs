@@ -460,6 +460,7 @@ fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Prob
             assert_eq!(g.points(live), view.points(n));
             // A publish withholds node index trees smaller than a tree chunk: the
             // reader walks those sub-trees (`check_view` compared the answers).
+            assert_eq!(g.node_index(id).is_some(), view.has_node_index(id));
             match (
                 g.node_index(id).map(|i| i.len()),
                 view.node_index(id).map(|i| i.len()),
@@ -501,6 +502,7 @@ fn check_all(
             g.node_index(id).map(|i| i.len()).filter(|&n| n > 0),
             archived.node_index(id).map(|i| i.len())
         );
+        assert_eq!(g.node_index(id).is_some(), archived.has_node_index(id));
     }
 }
 

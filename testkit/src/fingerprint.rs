@@ -115,7 +115,7 @@ pub fn layer_fingerprint<V: SceneView>(v: &V, layer: LayerId, with_dag: bool) ->
         features.sort_unstable();
         let out_edges: Vec<_> = v.out_edges(n).collect();
         let in_edges: Vec<_> = v.in_edges(n).collect();
-        let index = v.node_index(id).is_some().then(|| {
+        let index = v.has_node_index(id).then(|| {
             query::subtree(v, id)
                 .into_iter()
                 .map(|m| (m, layer_of(m), v.node(m).map(|m| v.points(m).to_vec())))

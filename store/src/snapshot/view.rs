@@ -270,6 +270,17 @@ impl<'a> ArchivedScene<'a> {
         }
     }
 
+    /// The segment of `node`'s layer and the position of the node index rooted at
+    /// `node` in it, if there is one (its tree may be withheld).
+    fn node_index_position(&self, node: NodeId) -> Option<(&'a ArchivedLayerSegment, usize)> {
+        let seg = self.seg(self.node(node)?);
+        let at = seg
+            .node_indexes
+            .binary_search_by_key(&node.0, |ni| ni.root.to_native())
+            .ok()?;
+        Some((seg, at))
+    }
+
     /// Tree `slot` of layer `layer` (id), which travels as a tree chunk.
     fn tree_chunk(&self, layer: u32, slot: u32) -> Option<&'a ArchivedKdTree> {
         let at = self
@@ -600,12 +611,7 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
-        let n = self.node(node)?;
-        let seg = self.seg(n);
-        let at = seg
-            .node_indexes
-            .binary_search_by_key(&node.0, |ni| ni.root.to_native())
-            .ok()?;
+        let (seg, at) = self.node_index_position(node)?;
         let ni = &seg.node_indexes[at];
         let tree = match ni.tree_chunk.as_ref() {
             Some(_) => self.tree_chunk(seg.layer.to_native(), 1 + at as u32)?,
@@ -616,5 +622,9 @@ impl SceneView for ArchivedScene<'_> {
         // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
         // the tree's items by the index's id table.
         Some(ArchivedIndex::new(tree, u64s(&ni.ids)))
+    }
+
+    fn has_node_index(&self, node: NodeId) -> bool {
+        self.node_index_position(node).is_some()
     }
 }
