@@ -133,7 +133,8 @@ pub unsafe extern "C" fn ygg_reader_wait_next(
 }
 
 /// The newest snapshot without blocking: `*snapshot` receives a new handle, or null
-/// before a first snapshot arrived.
+/// before a first snapshot arrived. A rejected snapshot is reported once; until a newer
+/// one arrives, later calls give the last accepted snapshot.
 ///
 /// Ownership: as `ygg_reader_wait_next`.
 ///

@@ -92,6 +92,8 @@ impl Reader {
     }
 
     /// The newest snapshot without blocking (`None` before the first one arrived).
+    /// A rejected snapshot raises `TransportError` once; until a newer one arrives, later
+    /// calls return the last accepted snapshot.
     fn latest(&self, py: Python<'_>) -> PyResult<Option<Scene>> {
         let got = self.with(py, |r| r.latest())?;
         got.map(Self::scene).map_err(|e| receive_error(&e))

@@ -252,7 +252,10 @@ class Reader:
     def wait_next(self, timeout: float = 1.0) -> Optional[Scene]:
         """The next snapshot, or ``None`` after ``timeout`` seconds; raises ``WriterGoneError``."""
     def latest(self) -> Optional[Scene]:
-        """The newest snapshot without blocking."""
+        """The newest snapshot without blocking (``None`` before the first one).
+
+        A rejected snapshot raises ``TransportError`` once; until a newer one arrives,
+        later calls return the last accepted snapshot."""
     @property
     def writer_status(self) -> str:
         """``"unknown"``, ``"alive"`` or ``"gone"``."""

@@ -24,7 +24,7 @@
 
 use crate::join_memo::JoinMemo;
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
 use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
@@ -167,6 +167,8 @@ pub struct SceneReader {
     /// What the current snapshot's join lets the next one skip.
     memo: JoinMemo,
     validations: u64,
+    /// The last cut refused: reported once, not validated again while it is the newest.
+    refused: Weak<Snapshot>,
 }
 
 /// Configures and opens a [`SceneReader`]; see [`SceneReader::builder`].
@@ -229,6 +231,7 @@ impl SceneReaderBuilder {
             current: None,
             memo: JoinMemo::default(),
             validations: 0,
+            refused: Weak::new(),
         })
     }
 }
@@ -246,7 +249,9 @@ impl SceneReader {
     /// `None` until a first snapshot arrived.
     ///
     /// # Errors
-    /// Transport errors, or a snapshot whose bytes fail validation.
+    /// Transport errors, or a snapshot whose bytes fail validation. A refused snapshot is
+    /// reported once: until a newer one arrives, later calls return the last accepted
+    /// snapshot without validating the refused one again.
     pub fn latest(&mut self) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
         let snap = self.subscriber.latest()?;
         self.accept(snap)
@@ -289,6 +294,8 @@ impl SceneReader {
         self.subscriber.termination_requested()
     }
 
+    /// `snap` as the current snapshot, validated (only what changed since the current
+    /// one); a cut already current or already refused gives the current snapshot.
     fn accept(
         &mut self,
         snap: Option<Arc<Snapshot>>,
@@ -296,13 +303,27 @@ impl SceneReader {
         let Some(snap) = snap else {
             return Ok(self.current.clone());
         };
-        if self
+        let current = self
             .current
             .as_ref()
-            .is_some_and(|c| Arc::ptr_eq(&c.inner, &snap))
-        {
+            .is_some_and(|c| Arc::ptr_eq(&c.inner, &snap));
+        // The weak pointer keeps the refused cut's allocation, so its address names it.
+        if current || Weak::ptr_eq(&self.refused, &Arc::downgrade(&snap)) {
             return Ok(self.current.clone());
         }
+        let refused = Arc::downgrade(&snap);
+        let result = self.accept_new(snap);
+        if result.is_err() {
+            self.refused = refused;
+        }
+        result
+    }
+
+    /// [`SceneReader::accept`] of a cut neither current nor refused.
+    fn accept_new(
+        &mut self,
+        snap: Arc<Snapshot>,
+    ) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
         let accepted = SceneSnapshot {
             private: self.private_cut(&snap),
             inner: snap,

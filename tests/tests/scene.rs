@@ -269,6 +269,12 @@ fn a_cut_that_lies_about_an_unchanged_layer_is_refused_and_the_last_one_kept() {
         2,
         "cut 2 still answers"
     );
+    // Reported once: while the refused cut is the newest, asking again gives the last
+    // accepted snapshot (the refused cut is not checked again).
+    for _ in 0..2 {
+        let latest = reader.latest().expect("the refusal is reported once");
+        assert_eq!(latest.map(|s| s.generation()), Some(2));
+    }
 
     // The next honest cut is accepted again.
     publish_cut(&mut publisher, &g, 4, |_| ());
