@@ -146,9 +146,9 @@ impl SceneGraph {
     /// kept exact as geometry changes below it and as nodes are nested under it or taken
     /// out. [`crate::query::nearest_in_subtree`] and [`crate::query::visible`] use it,
     /// and snapshots carry it in the segment of `node`'s layer (a publishing writer
-    /// withholds the tree of a sub-tree smaller than
-    /// [`TREE_CHUNK_MIN_POINTS`](crate::snapshot::TREE_CHUNK_MIN_POINTS) points: readers
-    /// walk it). Enabling an enabled index does nothing.
+    /// withholds the tree of a sub-tree of fewer than
+    /// [`TREE_CHUNK_MIN_POINTS`](crate::snapshot::TREE_CHUNK_MIN_POINTS) points in a few
+    /// nodes: readers walk it). Enabling an enabled index does nothing.
     ///
     /// # Errors
     /// [`GraphEditError::UnknownNode`].
@@ -276,6 +276,22 @@ impl SceneGraph {
     /// Points in the node index rooted at `root` (0 if there is none), in O(1).
     pub(crate) fn indexed_points(&self, root: NodeId) -> usize {
         self.indexes.nodes.get(&root).map_or(0, |tree| tree.len())
+    }
+
+    /// How many nodes with points `root`'s sub-tree holds, counting no further than
+    /// `cap`.
+    pub(crate) fn indexed_member_count(&self, root: NodeId, cap: usize) -> usize {
+        let mut count = 0;
+        let mut stack = vec![root];
+        while let Some(id) = stack.pop() {
+            let n = &self.nodes[&id];
+            count += usize::from(!n.points.is_empty());
+            if count >= cap {
+                break;
+            }
+            stack.extend(n.children.iter().copied());
+        }
+        count
     }
 
     /// The nodes with points in `root`'s sub-tree, with their points.

@@ -1020,3 +1020,48 @@ fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_se
     assert_eq!(shape(cached), shape(&fresh));
     assert_eq!(shape(&fresh)[0].2, 5);
 }
+
+/// With the default bounds, a publish withholds the tree of an object of two mesh nodes
+/// (100 points) but not that of an object of one node per vertex (100 nodes, 100 points),
+/// which a walk would visit node by node; moving the latter builds its tree again.
+#[test]
+fn a_small_tree_over_many_nodes_is_not_withheld() {
+    let mut g = SceneGraph::new();
+    let objects = g.add_layer("objects").unwrap();
+    let mesh = g.add_layer("mesh").unwrap();
+    g.add_layer_edge(objects, mesh).unwrap();
+    g.add_node(NodeId(1), objects).unwrap();
+    g.add_node(NodeId(2), objects).unwrap();
+    for k in 0..2u64 {
+        g.add_node(NodeId(100 + k), mesh).unwrap();
+        g.set_geometry(NodeId(100 + k), cluster(&[k as i8, 0, 0], 50))
+            .unwrap();
+        g.nest(NodeId(1), NodeId(100 + k)).unwrap();
+    }
+    for k in 0..100u64 {
+        g.add_node(NodeId(200 + k), mesh).unwrap();
+        g.set_geometry(NodeId(200 + k), vec![grid(&[k as i8 % 10, 5, 0])])
+            .unwrap();
+        g.nest(NodeId(2), NodeId(200 + k)).unwrap();
+    }
+    g.enable_node_index(NodeId(1)).unwrap();
+    g.enable_node_index(NodeId(2)).unwrap();
+    let mut cache = SegmentCache::new();
+    let tree_sizes = |cache: &mut SegmentCache, g: &mut SceneGraph| -> Vec<(u64, usize)> {
+        let published = cache.published_layer(g, objects);
+        published
+            .segment
+            .node_indexes
+            .iter()
+            .map(|i| (i.root, i.tree.size()))
+            .collect()
+    };
+    assert_eq!(tree_sizes(&mut cache, &mut g), vec![(1, 0), (2, 100)]);
+    for k in 0..100u64 {
+        g.set_geometry(NodeId(200 + k), vec![grid(&[k as i8 % 10, 6, 0])])
+            .unwrap();
+    }
+    g.set_geometry(NodeId(100), cluster(&[3, 3, 0], 50))
+        .unwrap();
+    assert_eq!(tree_sizes(&mut cache, &mut g), vec![(1, 0), (2, 100)]);
+}

@@ -41,12 +41,25 @@ const TREE_CHUNK_BIT: u32 = 1 << 30;
 /// Fewest points a kd-tree (a layer index's base tree or a node index's tree) has for a
 /// publishing writer to send it as a [`TreeChunk`](super::TreeChunk) (about 20 KiB
 /// archived). A smaller layer index tree stays in its layer segment; a smaller node
-/// index tree is withheld (readers walk so small a sub-tree), so that moving one object
-/// does not resend the trees of every object in its layer. Every segment of a cut costs
+/// index tree over a few nodes ([`WITHHELD_TREE_MAX_MEMBERS`]) is withheld (readers walk
+/// so small a sub-tree), so that moving one object does not resend the trees of every
+/// object in its layer. Every segment of a cut costs
 /// each reader a receive and a join per cut and a validation at attach: with a bound of
 /// 64 points the office's 213 object trees became chunks and single-layer updates and
 /// attach got slower by more than the bytes they saved (see `bench/results/issue19.md`).
 pub const TREE_CHUNK_MIN_POINTS: usize = 1024;
+
+/// Most nodes with points that a node index's sub-tree may hold for a publishing writer
+/// to withhold its tree (with fewer than [`TREE_CHUNK_MIN_POINTS`] points): the walk that
+/// replaces the tree visits each of them, so an object with one node per vertex (saffron)
+/// keeps its tree however few points it has.
+pub const WITHHELD_TREE_MAX_MEMBERS: usize = 16;
+
+/// Whether a publishing writer withholds the tree of a node index over `points` points
+/// in `members` nodes, sending trees of `min_points` or more as chunks.
+pub(crate) fn withholds_node_tree(points: usize, members: usize, min_points: usize) -> bool {
+    0 < points && points < min_points && members <= WITHHELD_TREE_MAX_MEMBERS
+}
 
 /// Bits of a chunk's segment id that hold its place in the column.
 const CHUNK_INDEX_BITS: u32 = 11;

@@ -5,8 +5,8 @@
 //! was built anew; and [`PublishedLayer`], a layer as it is published.
 
 use super::chunk::{
-    PointChunkSource, TreeChunkSource, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
-    is_chunked, tree_chunk_segment_id,
+    PointChunkSource, TreeChunkSource, WITHHELD_TREE_MAX_MEMBERS, chunk_count, chunk_range,
+    chunk_segment_id, has_tree_chunk, is_chunked, tree_chunk_segment_id, withholds_node_tree,
 };
 use super::schema::{LayerSegment, NodeIndexSegment, PointChunkRef, TreeChunkRef};
 use crate::index::{KdTree, build_tree};
@@ -196,9 +196,9 @@ impl ChunkState {
         self.node_trees_stale.push(index.root);
     }
 
-    /// Builds the trees of the stale node indexes of `segment` whose sub-trees hold
-    /// `min_points` points or more (every one for 0); the others stay stale. Roots no
-    /// longer indexed are forgotten.
+    /// Builds the trees of the stale node indexes of `segment` that a publish would not
+    /// withhold, its larger trees going out as chunks of `min_points` points or more
+    /// (every one for 0); the others stay stale. Roots no longer indexed are forgotten.
     pub(super) fn build_stale_node_trees(
         &mut self,
         graph: &SceneGraph,
@@ -214,7 +214,12 @@ impl ChunkState {
             else {
                 return false;
             };
-            if graph.indexed_points(NodeId(root)) < min_points {
+            let points = graph.indexed_points(NodeId(root));
+            let members =
+                || graph.indexed_member_count(NodeId(root), WITHHELD_TREE_MAX_MEMBERS + 1);
+            if points < min_points
+                && (points == 0 || withholds_node_tree(points, members(), min_points))
+            {
                 return true;
             }
             segment.node_indexes[at] = graph.archived_node_index(NodeId(root));
@@ -306,7 +311,7 @@ impl ChunkState {
             let points = index.tree.size();
             if !has_tree_chunk(layer, 1 + i, points, min_points) {
                 self.node_refs.push((index.root, None));
-                if 0 < points && points < min_points {
+                if withholds_node_tree(points, index.ids.len(), min_points) {
                     // Withheld: readers walk a sub-tree this small (`SceneView::node_index`
                     // gives no index), so moving one object does not resend every
                     // object tree of its layer.

@@ -47,8 +47,8 @@ pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use cache::SegmentCache;
 pub use chunk::{
     MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, PointChunkSource,
-    TREE_CHUNK_MIN_POINTS, TreeChunkSource, chunk_segment_id, chunk_segment_layer,
-    is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
+    TREE_CHUNK_MIN_POINTS, TreeChunkSource, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id,
+    chunk_segment_layer, is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
 };
 pub use chunk_state::{ChunkShape, PublishedLayer};
 pub use file::{FILE_MAGIC, SnapshotFile};

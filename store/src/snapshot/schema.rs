@@ -180,7 +180,8 @@ pub struct NodeIndexSegment {
     pub ids: Vec<u64>,
     /// A kd-tree over every point in the sub-tree. Empty when the tree travels as a
     /// [`TreeChunk`] (`tree_chunk`), and when a publishing writer withheld a tree of
-    /// fewer than [`TREE_CHUNK_MIN_POINTS`](super::TREE_CHUNK_MIN_POINTS) points: readers
+    /// fewer than [`TREE_CHUNK_MIN_POINTS`](super::TREE_CHUNK_MIN_POINTS) points in at
+    /// most [`WITHHELD_TREE_MAX_MEMBERS`](super::WITHHELD_TREE_MAX_MEMBERS) nodes: readers
     /// then walk the sub-tree, as for a node without an index (an empty tree without a
     /// chunk gives no index).
     pub tree: KdTree,
