@@ -257,6 +257,21 @@ struct Probe {
     range: u8,
 }
 
+/// Six probes `i` in 0..6 at `centre(i)`, asking for `m[i % 3]` nodes, radius `i + 1`,
+/// looking along +x with `half_angle` degrees, range 8.
+fn six_probes(centre: impl Fn(i8) -> [i8; 3], m: [usize; 3], half_angle: u8) -> Vec<Probe> {
+    (0..6i8)
+        .map(|i| Probe {
+            c: centre(i),
+            m: m[i as usize % 3],
+            r: i as u8 + 1,
+            dir: [1, 0, 0],
+            half_angle,
+            range: 8,
+        })
+        .collect()
+}
+
 fn probe() -> impl Strategy<Value = Probe> {
     (
         [-8i8..8, -8i8..8, -8i8..8],
@@ -914,16 +929,7 @@ fn a_fold_that_keeps_the_point_count_resends_the_tree_chunk() {
         g.set_geometry(NodeId(i), cluster(&p, 50)).unwrap();
     }
     g.enable_layer_index(mesh).unwrap();
-    let probes: Vec<Probe> = (0..6i8)
-        .map(|i| Probe {
-            c: [i - 3, 2 - i, i % 3],
-            m: [1, 10, 60][i as usize % 3],
-            r: i as u8 + 1,
-            dir: [1, 0, 0],
-            half_angle: 20,
-            range: 8,
-        })
-        .collect();
+    let probes = six_probes(|i| [i - 3, 2 - i, i % 3], [1, 10, 60], 20);
     let mut publisher = Publisher::new();
     let mut resent = 0;
     let mut last = None;
@@ -968,16 +974,7 @@ fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_se
         g.nest(NodeId(i), NodeId(100 + i)).unwrap();
         g.enable_node_index(NodeId(i)).unwrap();
     }
-    let probes: Vec<Probe> = (0..6i8)
-        .map(|i| Probe {
-            c: [2 * i - 6, 1, i % 2],
-            m: [1, 3, 8][i as usize % 3],
-            r: i as u8 + 1,
-            dir: [1, 0, 0],
-            half_angle: 30,
-            range: 8,
-        })
-        .collect();
+    let probes = six_probes(|i| [2 * i - 6, 1, i % 2], [1, 3, 8], 30);
     let mut publisher = Publisher::new();
     check_published(&mut g, &mut publisher, &probes);
     let big_tree = |publisher: &Publisher| {
