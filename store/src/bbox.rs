@@ -116,7 +116,10 @@ impl SceneGraph {
     }
 
     /// Applies a change of sub-tree points (`removed` left, `added` joined) to every
-    /// enabled box at or above `from`.
+    /// enabled box at or above `from`. The added points are counted first: a point that
+    /// moves within a face (a translation along it) then never empties that face, so
+    /// moving a node of many one-point children one child at a time (saffron) recomputes
+    /// the box only when a face's last point really leaves it.
     fn update_boxes(&mut self, from: NodeId, removed: &[Point], added: &[Point]) {
         let (removed_box, added_box) = (Aabb::from_points(removed), Aabb::from_points(added));
         let mut cur = Some(from);
@@ -126,9 +129,10 @@ impl SceneGraph {
             if !node.bbox_enabled {
                 continue;
             }
+            let grew = add_points(node, added, added_box);
             if remove_points(node, removed, removed_box) {
                 self.recompute_box(n);
-            } else if add_points(node, added, added_box) {
+            } else if grew {
                 let layer = node.layer;
                 self.touch_layer(layer, Change::Node(n));
             }
