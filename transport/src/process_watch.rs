@@ -161,20 +161,14 @@ fn open_matching(details: &NodeDetails) -> Option<OwnedFd> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::protocol::iceoryx_config;
     use crate::test_prefix::TestPrefix;
-    use iceoryx2::prelude::*;
 
     /// A node of this process under an iceoryx2 prefix of its own (`tag` and the pid),
     /// its details as iceoryx2 reads them back, and the prefix (its files go with it).
     pub(crate) fn own_node(tag: &str) -> (Node<Ipc>, Option<NodeDetails>, TestPrefix) {
         let prefix = TestPrefix::new(&format!("pw_{tag}"));
-        let config = iceoryx_config(Some(prefix.as_str())).expect("config");
-        let node = NodeBuilder::new()
-            .config(&config)
-            .create::<Ipc>()
-            .expect("node");
-        let details = match Node::<Ipc>::state_of(&config, *node.id()) {
+        let node = prefix.node();
+        let details = match Node::<Ipc>::state_of(node.config(), *node.id()) {
             Ok(Some(NodeState::Alive(view))) => view.details().clone(),
             other => panic!("own node not alive: {other:?}"),
         };

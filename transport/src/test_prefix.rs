@@ -2,6 +2,9 @@
 //! `/dev/shm` (iceoryx2's per-prefix `global_mgmt` counter stays after every node is
 //! gone) are removed when it is dropped.
 
+use crate::protocol::{Ipc, iceoryx_config};
+use iceoryx2::prelude::*;
+
 /// A unit test's iceoryx2 prefix: `ygg_<tag>_<pid>_`.
 pub(crate) struct TestPrefix(String);
 
@@ -11,9 +14,13 @@ impl TestPrefix {
         TestPrefix(format!("ygg_{tag}_{}_", std::process::id()))
     }
 
-    /// The prefix itself.
-    pub(crate) fn as_str(&self) -> &str {
-        &self.0
+    /// A node of this process under this prefix.
+    pub(crate) fn node(&self) -> Node<Ipc> {
+        let config = iceoryx_config(Some(&self.0)).expect("config");
+        NodeBuilder::new()
+            .config(&config)
+            .create::<Ipc>()
+            .expect("node")
     }
 }
 

@@ -89,7 +89,6 @@ fn descriptor(listener: &Listener<Ipc>) -> BorrowedFd<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::iceoryx_config;
     use crate::test_prefix::TestPrefix;
     use iceoryx2::prelude::*;
     use rustix::process::{Pid, PidfdFlags, pidfd_open};
@@ -99,12 +98,7 @@ mod tests {
     /// A node under a prefix of its own (its files go with the prefix).
     fn node(tag: &str) -> (Node<Ipc>, TestPrefix) {
         let prefix = TestPrefix::new(&format!("wk_{tag}"));
-        let config = iceoryx_config(Some(prefix.as_str())).expect("config");
-        let node = NodeBuilder::new()
-            .config(&config)
-            .create::<Ipc>()
-            .expect("node");
-        (node, prefix)
+        (prefix.node(), prefix)
     }
 
     #[test]
