@@ -131,8 +131,8 @@ pub(super) struct ChunkState {
     /// whose tree the last publish sent as a chunk.
     node_trees_rebuilt: Vec<u64>,
     /// Roots of node indexes whose sub-tree changed and whose tree is not built yet
-    /// (empty in the segment): built when the segment is asked for inline, or published
-    /// with a tree of [`ChunkState::publish_form`]'s `tree_min_points` or more.
+    /// (empty in the segment): built when the segment is asked for inline, or when a
+    /// publish would not withhold the tree (see [`ChunkState::build_stale_node_trees`]).
     node_trees_stale: Vec<u64>,
     /// Empty trees that stand in for the trees moved aside, kept for reuse: building
     /// one costs about a microsecond, a publish moves a tree per chunked index.
@@ -215,11 +215,8 @@ impl ChunkState {
                 return false;
             };
             let points = graph.indexed_points(NodeId(root));
-            let members =
-                || graph.indexed_member_count(NodeId(root), WITHHELD_TREE_MAX_MEMBERS + 1);
-            if points < min_points
-                && (points == 0 || withholds_node_tree(points, members(), min_points))
-            {
+            let members = graph.indexed_member_count(NodeId(root), WITHHELD_TREE_MAX_MEMBERS + 1);
+            if withholds_node_tree(points, members, min_points) {
                 return true;
             }
             segment.node_indexes[at] = graph.archived_node_index(NodeId(root));
