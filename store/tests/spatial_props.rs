@@ -954,26 +954,38 @@ fn a_fold_that_keeps_the_point_count_resends_the_tree_chunk() {
     );
 }
 
+/// A graph of an `objects` layer over a `mesh` layer, and the objects layer: each
+/// object `(id, parts)` nests one mesh node per part `(id, points)` and has a node index.
+fn indexed_objects(
+    objects: impl IntoIterator<Item = (u64, Vec<(u64, Vec<Point>)>)>,
+) -> (SceneGraph, LayerId) {
+    let mut g = SceneGraph::new();
+    let object_layer = g.add_layer("objects").unwrap();
+    let mesh = g.add_layer("mesh").unwrap();
+    g.add_layer_edge(object_layer, mesh).unwrap();
+    for (object, parts) in objects {
+        g.add_node(NodeId(object), object_layer).unwrap();
+        for (part, points) in parts {
+            g.add_node(NodeId(part), mesh).unwrap();
+            g.set_geometry(NodeId(part), points).unwrap();
+            g.nest(NodeId(object), NodeId(part)).unwrap();
+        }
+        g.enable_node_index(NodeId(object)).unwrap();
+    }
+    (g, object_layer)
+}
+
 /// A publishing writer withholds node index trees smaller than a tree chunk: moving a
 /// small object resends neither its tree nor the large object's tree chunk, answers stay
 /// those of brute force (the sub-tree is walked), and the same cache asked for the layer
 /// inline builds every tree it had left unbuilt.
 #[test]
 fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_segment() {
-    let mut g = SceneGraph::new();
-    let objects = g.add_layer("objects").unwrap();
-    let mesh = g.add_layer("mesh").unwrap();
-    g.add_layer_edge(objects, mesh).unwrap();
     // Objects 0..6 hold 5 points each (below `TREE_CHUNK`); object 6 holds 40.
-    for i in 0..7u64 {
-        g.add_node(NodeId(i), objects).unwrap();
-        g.add_node(NodeId(100 + i), mesh).unwrap();
+    let (mut g, objects) = indexed_objects((0..7u64).map(|i| {
         let k = if i == 6 { 40 } else { 5 };
-        let p = [2 * i as i8 - 6, 0, 0];
-        g.set_geometry(NodeId(100 + i), cluster(&p, k)).unwrap();
-        g.nest(NodeId(i), NodeId(100 + i)).unwrap();
-        g.enable_node_index(NodeId(i)).unwrap();
-    }
+        (i, vec![(100 + i, cluster(&[2 * i as i8 - 6, 0, 0], k))])
+    }));
     let probes = six_probes(|i| [2 * i - 6, 1, i % 2], [1, 3, 8], 30);
     let mut publisher = Publisher::new();
     check_published(&mut g, &mut publisher, &probes);
@@ -1023,26 +1035,10 @@ fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_se
 /// which a walk would visit node by node; moving the latter builds its tree again.
 #[test]
 fn a_small_tree_over_many_nodes_is_not_withheld() {
-    let mut g = SceneGraph::new();
-    let objects = g.add_layer("objects").unwrap();
-    let mesh = g.add_layer("mesh").unwrap();
-    g.add_layer_edge(objects, mesh).unwrap();
-    g.add_node(NodeId(1), objects).unwrap();
-    g.add_node(NodeId(2), objects).unwrap();
-    for k in 0..2u64 {
-        g.add_node(NodeId(100 + k), mesh).unwrap();
-        g.set_geometry(NodeId(100 + k), cluster(&[k as i8, 0, 0], 50))
-            .unwrap();
-        g.nest(NodeId(1), NodeId(100 + k)).unwrap();
-    }
-    for k in 0..100u64 {
-        g.add_node(NodeId(200 + k), mesh).unwrap();
-        g.set_geometry(NodeId(200 + k), vec![grid(&[k as i8 % 10, 5, 0])])
-            .unwrap();
-        g.nest(NodeId(2), NodeId(200 + k)).unwrap();
-    }
-    g.enable_node_index(NodeId(1)).unwrap();
-    g.enable_node_index(NodeId(2)).unwrap();
+    let two_nodes = (0..2u64).map(|k| (100 + k, cluster(&[k as i8, 0, 0], 50)));
+    let one_per_point = (0..100u64).map(|k| (200 + k, vec![grid(&[k as i8 % 10, 5, 0])]));
+    let (mut g, objects) =
+        indexed_objects([(1, two_nodes.collect()), (2, one_per_point.collect())]);
     let mut cache = SegmentCache::new();
     let tree_sizes = |cache: &mut SegmentCache, g: &mut SceneGraph| -> Vec<(u64, usize)> {
         let published = cache.published_layer(g, objects);
