@@ -17,7 +17,7 @@
 use crate::change::Change;
 use crate::error::{EditResult, GraphEditError};
 use crate::graph::Node;
-use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
+use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree, PointChange};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 
 /// The index trees of another graph that this one takes over (see
@@ -359,13 +359,14 @@ impl SceneGraph {
         // Tree `k` (the layer index first, then the node indexes of `roots`, as located).
         let located_in = |k: usize| is_located.then(|| &located[k * per_tree..(k + 1) * per_tree]);
         let mut k = 0;
+        let change = PointChange::new(old, new);
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
-            t.apply(h, old, new, located_in(k));
+            t.apply(h, &change, located_in(k));
             k += 1;
         }
         for &r in &roots {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
-            t.apply(h, old, new, located_in(k));
+            t.apply(h, &change, located_in(k));
             k += 1;
         }
         for r in roots {
@@ -397,14 +398,21 @@ impl SceneGraph {
                 (h, points)
             })
             .collect();
+        let changes: Vec<(u32, PointChange)> = moved
+            .iter()
+            .map(|(h, points)| {
+                let change = if added {
+                    PointChange::new(&[], points)
+                } else {
+                    PointChange::new(points, &[])
+                };
+                (*h, change)
+            })
+            .collect();
         for r in roots {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
-            for (h, points) in &moved {
-                if added {
-                    t.apply(*h, &[], points, None);
-                } else {
-                    t.apply(*h, points, &[], None);
-                }
+            for (h, change) in &changes {
+                t.apply(*h, change, None);
             }
             let rl = self.nodes[&r].layer;
             self.touch_layer(rl, Change::IndexRoot(r));
@@ -420,7 +428,11 @@ impl SceneGraph {
         if node.index_handle != NO_HANDLE
             && let Some(t) = self.indexes.layers.get_mut(&node.layer)
         {
-            t.apply(node.index_handle, &node.points, &[], None);
+            t.apply(
+                node.index_handle,
+                &PointChange::new(&node.points, &[]),
+                None,
+            );
         }
         self.indexes.release(node.index_handle);
     }

@@ -65,19 +65,21 @@ impl Aabb {
     ///
     /// Runs over the coordinates as one flat array in blocks of eight points, each
     /// coordinate of a block with its own running bound, so the bounds do not wait on
-    /// one another (several times faster than growing one box point by point).
+    /// one another (several times faster than growing one box point by point). The
+    /// bounds of a block are plain comparisons (`<`, `>`), which compile to the
+    /// processor's min and max; like [`f32::min`], they skip a NaN coordinate.
     pub fn from_points(points: &[Point]) -> Option<Self> {
         const LANES: usize = 24;
         let first = *points.first()?;
         let flat: &[f32] = bytemuck::cast_slice(points);
         let blocks = flat.chunks_exact(LANES);
         let rest = blocks.remainder();
-        let mut lo: [f32; LANES] = std::array::from_fn(|i| first[i % 3]);
-        let mut hi = lo;
+        let mut lo = [f32::INFINITY; LANES];
+        let mut hi = [f32::NEG_INFINITY; LANES];
         for block in blocks {
             for i in 0..LANES {
-                lo[i] = lo[i].min(block[i]);
-                hi[i] = hi[i].max(block[i]);
+                lo[i] = if block[i] < lo[i] { block[i] } else { lo[i] };
+                hi[i] = if block[i] > hi[i] { block[i] } else { hi[i] };
             }
         }
         let mut b = Aabb::from_point(first);
@@ -146,7 +148,10 @@ impl Aabb {
 /// The parts of two point lists that differ: `old` and `new` without their common
 /// prefix and suffix (points compared bit for bit). Moving one point of a node, or
 /// appending points to it, then costs index and box updates for those points only.
-pub(crate) fn changed_points<'a>(old: &'a [Point], new: &'a [Point]) -> (&'a [Point], &'a [Point]) {
+pub(crate) fn changed_points<'o, 'n>(
+    old: &'o [Point],
+    new: &'n [Point],
+) -> (&'o [Point], &'n [Point]) {
     let (a, b): (&[[u32; 3]], &[[u32; 3]]) = (bytemuck::cast_slice(old), bytemuck::cast_slice(new));
     let prefix = prefix_len(a, b);
     let suffix = suffix_len(&a[prefix..], &b[prefix..]);

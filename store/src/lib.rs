@@ -23,6 +23,7 @@ mod graph;
 mod graph_indexes;
 mod id;
 pub mod index;
+mod invariants;
 mod live_view;
 mod points;
 pub mod query;

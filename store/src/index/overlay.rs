@@ -27,6 +27,8 @@
 
 use super::live::{Entry, LiveKdTree, Located};
 use crate::{Aabb, Point, distance_squared};
+use std::cell::OnceCell;
+use std::sync::Arc;
 
 /// Changed points (removed plus added, after trimming the common prefix and suffix) from
 /// which an update of one item goes to the overlay instead of the tree.
@@ -41,11 +43,48 @@ const OVERLAY_MIN: usize = 1024;
 struct Moved {
     item: u32,
     /// The points of the item's (dead) entries in the tree.
-    in_tree: Vec<Point>,
+    in_tree: Arc<[Point]>,
     /// The item's live points (not empty).
-    points: Vec<Point>,
+    points: Arc<[Point]>,
     /// A box around `points`.
     bbox: Aabb,
+}
+
+/// One item's points before and after a change, as handed to every tree the change goes
+/// to (a layer index and the node indexes above the item). What an overlay keeps of them
+/// (a copy of each list, the new points' box) is made by the first tree that keeps it and
+/// shared by the others.
+pub(crate) struct PointChange<'a> {
+    old: &'a [Point],
+    new: &'a [Point],
+    kept_old: OnceCell<Arc<[Point]>>,
+    kept_new: OnceCell<(Arc<[Point]>, Aabb)>,
+}
+
+impl<'a> PointChange<'a> {
+    /// The change from `old` to `new`.
+    pub(crate) fn new(old: &'a [Point], new: &'a [Point]) -> Self {
+        PointChange {
+            old,
+            new,
+            kept_old: OnceCell::new(),
+            kept_new: OnceCell::new(),
+        }
+    }
+
+    /// The old points, as an overlay keeps them.
+    fn kept_old(&self) -> Arc<[Point]> {
+        Arc::clone(self.kept_old.get_or_init(|| Arc::from(self.old)))
+    }
+
+    /// The new points (not empty) and their box, as an overlay keeps them.
+    fn kept_new(&self) -> (Arc<[Point]>, Aabb) {
+        let (points, bbox) = self.kept_new.get_or_init(|| {
+            let bbox = Aabb::from_points(self.new).expect("not empty");
+            (Arc::from(self.new), bbox)
+        });
+        (Arc::clone(points), *bbox)
+    }
 }
 
 /// A [`LiveKdTree`] plus an overlay of items moved wholesale (see the module docs).
@@ -57,11 +96,9 @@ pub(crate) struct OverlaidTree {
     dead_len: usize,
 }
 
+/// Whether two point lists are equal bit for bit (one memory compare).
 fn same_points(a: &[Point], b: &[Point]) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits))
+    bytemuck::cast_slice::<Point, u32>(a) == bytemuck::cast_slice::<Point, u32>(b)
 }
 
 impl OverlaidTree {
@@ -88,12 +125,13 @@ impl OverlaidTree {
         self.tree.len() - self.dead_len + self.overlay_len
     }
 
-    /// Bytes held by the tree and the overlay.
+    /// Bytes held by the tree and the overlay (overlay points shared with another tree
+    /// counted in each).
     pub(crate) fn memory_bytes(&self) -> usize {
         let points: usize = self
             .moved
             .iter()
-            .map(|m| m.in_tree.capacity() + m.points.capacity())
+            .map(|m| m.in_tree.len() + m.points.len())
             .sum();
         self.tree.memory_bytes()
             + self.moved.capacity() * std::mem::size_of::<Moved>()
@@ -111,17 +149,17 @@ impl OverlaidTree {
         &self.tree
     }
 
-    /// The live points of `item` change from `old` (exactly its live points) to `new`.
-    /// `located` (if given) holds where each changed point descends to in the tree,
-    /// removed ones first, as [`LiveKdTree::locate`] found them under its current shape;
-    /// it is used when the change goes to the tree point by point.
+    /// The live points of `item` change from `change.old` (exactly its live points) to
+    /// `change.new`. `located` (if given) holds where each changed point descends to in
+    /// the tree, removed ones first, as [`LiveKdTree::locate`] found them under its
+    /// current shape; it is used when the change goes to the tree point by point.
     pub(crate) fn apply(
         &mut self,
         item: u32,
-        old: &[Point],
-        new: &[Point],
+        change: &PointChange<'_>,
         located: Option<&[Located]>,
     ) {
+        let (old, new) = (change.old, change.new);
         match self.moved.binary_search_by_key(&item, |m| m.item) {
             Ok(at) => {
                 let m = &mut self.moved[at];
@@ -132,7 +170,7 @@ impl OverlaidTree {
                     self.overlay_len -= m.points.len();
                     self.dead_len -= m.in_tree.len();
                     if new.is_empty() {
-                        for p in &m.in_tree {
+                        for p in m.in_tree.iter() {
                             let found = self.tree.remove(*p, item);
                             debug_assert!(found, "dead entry {p:?} missing");
                         }
@@ -140,9 +178,7 @@ impl OverlaidTree {
                     return;
                 }
                 self.overlay_len = self.overlay_len - m.points.len() + new.len();
-                m.points.clear();
-                m.points.extend_from_slice(new);
-                m.bbox = Aabb::from_points(new).expect("not empty");
+                (m.points, m.bbox) = change.kept_new();
             }
             Err(at) => {
                 let (removed, added) = crate::id::changed_points(old, new);
@@ -164,13 +200,14 @@ impl OverlaidTree {
                     }
                     return;
                 }
+                let (points, bbox) = change.kept_new();
                 self.moved.insert(
                     at,
                     Moved {
                         item,
-                        in_tree: old.to_vec(),
-                        points: new.to_vec(),
-                        bbox: Aabb::from_points(new).expect("not empty"),
+                        in_tree: change.kept_old(),
+                        points,
+                        bbox,
                     },
                 );
                 self.overlay_len += new.len();
@@ -206,11 +243,11 @@ impl OverlaidTree {
             self.tree = LiveKdTree::from_entries(entries);
         } else {
             for m in &moved {
-                for p in &m.in_tree {
+                for p in m.in_tree.iter() {
                     let found = self.tree.remove(*p, m.item);
                     debug_assert!(found, "dead entry {p:?} missing");
                 }
-                for p in &m.points {
+                for p in m.points.iter() {
                     self.tree.insert(*p, m.item);
                 }
             }
@@ -248,7 +285,7 @@ impl OverlaidTree {
             if m.bbox.distance_squared_to(c) > bound {
                 continue;
             }
-            for p in &m.points {
+            for p in m.points.iter() {
                 let d2 = distance_squared(p, c);
                 if d2 <= bound {
                     bound = f(d2, m.item);
@@ -272,7 +309,7 @@ impl OverlaidTree {
             if m.bbox.distance_squared_to(c) > r2 {
                 continue;
             }
-            for p in &m.points {
+            for p in m.points.iter() {
                 let d2 = distance_squared(p, c);
                 if d2 <= r2 {
                     f(d2, m.item, p);
@@ -429,7 +466,7 @@ mod tests {
                     .moved
                     .iter()
                     .find(|m| m.item == i as u32)
-                    .map_or(old.clone(), |m| m.in_tree.clone()),
+                    .map_or(old.clone(), |m| m.in_tree.to_vec()),
                 // Gone.
                 4 if rng.gen_bool(0.2) => Vec::new(),
                 // Replaced by a new cluster.
@@ -440,7 +477,7 @@ mod tests {
                 }
             };
             let before = t.moved.len();
-            t.apply(i as u32, &old, &new, None);
+            t.apply(i as u32, &PointChange::new(&old, &new), None);
             overlaid += usize::from(t.moved.len() > before);
             merged += usize::from(t.moved.len() < before && t.moved.is_empty() && before > 1);
             model[i] = new;
@@ -468,7 +505,7 @@ mod tests {
                 .iter()
                 .map(|p| [p[0] + k as f32, p[1], p[2]])
                 .collect();
-            t.apply(3, &cur, &next, None);
+            t.apply(3, &PointChange::new(&cur, &next), None);
             cur = next;
             // The tree still holds the original entries, all dead; the overlay the rest.
             assert_eq!(t.tree.len(), 190);
@@ -476,12 +513,12 @@ mod tests {
         }
         t.check().unwrap();
         // Back home: live again, nothing in the overlay.
-        t.apply(3, &cur, &points, None);
+        t.apply(3, &PointChange::new(&cur, &points), None);
         assert!(t.moved.is_empty());
         assert_eq!(t.len(), 190);
         // Gone: the dead entries are purged, so the item may be reused.
-        t.apply(3, &points, &cur, None);
-        t.apply(3, &cur, &[], None);
+        t.apply(3, &PointChange::new(&points, &cur), None);
+        t.apply(3, &PointChange::new(&cur, &[]), None);
         assert_eq!((t.len(), t.tree.len()), (0, 0));
         t.check().unwrap();
     }
