@@ -2,6 +2,7 @@
 //! one place where layer names are written and read.
 
 use crate::{DsgLayer, LayerKey};
+use std::cell::RefCell;
 use ygg_store::{LayerId, NodeId, SceneView};
 
 /// What a layer of a scene built by [`super::build`] holds, with the room it serves in
@@ -91,27 +92,32 @@ const UNCLAIMED_MESH_SUFFIX: &str = "/unclaimed-mesh";
 impl LayerRole {
     /// The name of the layer holding this role.
     pub fn name(&self) -> String {
-        match *self {
-            LayerRole::Mesh => MESH_NAME.to_owned(),
-            LayerRole::RoomGroups { room } => format!("{ROOM_PREFIX}{}", room.0),
-            LayerRole::ClaimedObjects { room } => {
-                format!("{ROOM_PREFIX}{}{CLAIMED_OBJECT_SUFFIX}", room.0)
-            }
-            LayerRole::ClaimedMesh { room } => {
-                format!("{ROOM_PREFIX}{}{CLAIMED_MESH_SUFFIX}", room.0)
-            }
-            LayerRole::UnclaimedMesh { room } => {
-                format!("{ROOM_PREFIX}{}{UNCLAIMED_MESH_SUFFIX}", room.0)
-            }
+        let mut name = String::new();
+        self.write_name(&mut name);
+        name
+    }
+
+    /// Appends the name of the layer holding this role to `out` (no allocation beyond
+    /// `out`'s growth).
+    pub fn write_name(&self, out: &mut String) {
+        let (room, suffix) = match *self {
+            LayerRole::Mesh => return out.push_str(MESH_NAME),
+            LayerRole::RoomGroups { room } => (room, ""),
+            LayerRole::ClaimedObjects { room } => (room, CLAIMED_OBJECT_SUFFIX),
+            LayerRole::ClaimedMesh { room } => (room, CLAIMED_MESH_SUFFIX),
+            LayerRole::UnclaimedMesh { room } => (room, UNCLAIMED_MESH_SUFFIX),
             spark_dsg => {
                 let key = SPARK_DSG_ROLES
                     .iter()
                     .find(|(r, _)| *r == spark_dsg)
                     .map(|&(_, key)| key)
                     .expect("every other role is named after a Spark-DSG layer key");
-                DsgLayer::default_name(key)
+                return out.push_str(&DsgLayer::default_name(key));
             }
-        }
+        };
+        out.push_str(ROOM_PREFIX);
+        out.push_str(itoa::Buffer::new().format(room.0));
+        out.push_str(suffix);
     }
 
     /// The role of the layer called `name`: the inverse of [`LayerRole::name`]. `None`
@@ -194,7 +200,16 @@ pub fn layer_roles<V: SceneView>(view: &V) -> impl Iterator<Item = (LayerId, Lay
 
 /// The layer of `view` holding `role`, if there is one.
 pub fn layer_with_role<V: SceneView>(view: &V, role: LayerRole) -> Option<LayerId> {
-    view.layer_by_name(&role.name())
+    thread_local! {
+        /// The name looked up, written again for every lookup (no allocation per lookup:
+        /// object queries look a room's layers up each time they are built).
+        static NAME: RefCell<String> = const { RefCell::new(String::new()) };
+    }
+    NAME.with_borrow_mut(|name| {
+        name.clear();
+        role.write_name(name);
+        view.layer_by_name(name)
+    })
 }
 
 #[cfg(test)]
