@@ -8,6 +8,7 @@
 
 use crate::change::Change;
 use crate::graph::{Node, SceneGraph};
+use crate::point_change::PointChange;
 use crate::{Aabb, NodeId, Point};
 
 /// How many of `points` lie on each face of `b` (`==` on the face's coordinate; min x,
@@ -141,14 +142,22 @@ impl SceneGraph {
     /// enabled box at or above `from`, then recomputes the boxes a face of which lost its
     /// last point.
     fn update_boxes(&mut self, from: NodeId, removed: &[Point], added: &[Point]) {
-        for n in self.adjust_boxes(from, removed, added) {
+        let emptied = self.adjust_boxes(from, removed, added, Aabb::from_points(added));
+        self.recompute_boxes(emptied);
+    }
+
+    /// Recomputes each of `ids`' boxes from its sub-tree (the boxes
+    /// [`SceneGraph::geometry_changed`] returns, once the node holds its new points).
+    pub(crate) fn recompute_boxes(&mut self, ids: Vec<NodeId>) {
+        for n in ids {
             self.recompute_box(n);
         }
     }
 
-    /// Applies a change of sub-tree points to every enabled box at or above `from`, as
-    /// far as the change itself tells; returns the boxes a face of which lost its last
-    /// point, to recompute from their sub-trees once these hold their new points.
+    /// Applies a change of sub-tree points (`added_box` is the added points' box) to every
+    /// enabled box at or above `from`, as far as the change itself tells; returns the
+    /// boxes a face of which lost its last point, to recompute from their sub-trees once
+    /// these hold their new points.
     ///
     /// The added points are counted first: a point that moves within a face (a
     /// translation along it) then never empties that face, so moving a node of many
@@ -157,8 +166,13 @@ impl SceneGraph {
     /// points' own box, with no removal to count; its old box is then the removed
     /// points' box, which the boxes above need.
     #[must_use]
-    fn adjust_boxes(&mut self, from: NodeId, removed: &[Point], added: &[Point]) -> Vec<NodeId> {
-        let added_box = Aabb::from_points(added);
+    fn adjust_boxes(
+        &mut self,
+        from: NodeId,
+        removed: &[Point],
+        added: &[Point],
+        added_box: Option<Aabb>,
+    ) -> Vec<NodeId> {
         let mut removed_box: Option<Option<Aabb>> = None;
         let mut emptied = Vec::new();
         let mut cur = Some(from);
@@ -193,20 +207,21 @@ impl SceneGraph {
         emptied
     }
 
-    /// Keeps boxes exact after `id`'s points changed from `old` to its current points.
-    pub(crate) fn geometry_changed(&mut self, id: NodeId, old: &[Point]) {
+    /// Keeps boxes exact as `id`'s points change (`change`); the node may not hold its
+    /// new points yet. Returns the boxes to recompute ([`SceneGraph::recompute_boxes`])
+    /// once it does.
+    #[must_use]
+    pub(crate) fn geometry_changed(&mut self, id: NodeId, change: &PointChange<'_>) -> Vec<NodeId> {
         if !self.any_box_at_or_above(id) {
-            return;
+            return Vec::new();
         }
-        // The new points leave the node while the boxes above change (no copy of them),
-        // and are back before an emptied box is recomputed from its sub-tree.
-        let new = std::mem::take(&mut self.nodes.get_mut(&id).expect("exists").points);
-        let (removed, added) = crate::id::changed_points(old, &new);
-        let emptied = self.adjust_boxes(id, removed, added);
-        self.nodes.get_mut(&id).expect("exists").points = new;
-        for n in emptied {
-            self.recompute_box(n);
-        }
+        let (removed, added) = change.changed();
+        let added_box = if added.len() == change.new_points().len() {
+            change.new_box()
+        } else {
+            Aabb::from_points(added)
+        };
+        self.adjust_boxes(id, removed, added, added_box)
     }
 
     /// Keeps boxes exact after `child`'s sub-tree was nested under `parent`.

@@ -17,6 +17,7 @@ use crate::change::{Change, LayerChanges};
 use crate::error::{EditResult, GraphEditError};
 use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
 use crate::index::LiveIndexes;
+use crate::point_change::PointChange;
 use crate::touch_log::TouchLog;
 use crate::{Aabb, LayerId, NodeId, Point};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -427,12 +428,18 @@ impl SceneGraph {
                 .unwrap_or_default();
             return Err(GraphEditError::NonFinitePoint { node: id, index });
         }
+        // The boxes and indexes above take the change from `old` and `points` while the
+        // node holds none; it takes its new points before a box a face of which lost its
+        // last point is recomputed from the sub-tree.
         let node = self.nodes.get_mut(&id).expect("checked");
-        let old = std::mem::replace(&mut node.points, points);
+        let old = std::mem::take(&mut node.points);
         let layer = node.layer;
         self.touch_layer(layer, Change::Geometry(id));
-        self.geometry_changed(id, &old);
-        self.index_geometry_changed(id, &old);
+        let change = PointChange::new(&old, &points);
+        let emptied = self.geometry_changed(id, &change);
+        self.index_geometry_changed(id, &change);
+        self.nodes.get_mut(&id).expect("checked").points = points;
+        self.recompute_boxes(emptied);
         Ok(())
     }
 

@@ -17,7 +17,8 @@
 use crate::change::Change;
 use crate::error::{EditResult, GraphEditError};
 use crate::graph::Node;
-use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree, PointChange};
+use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
+use crate::point_change::PointChange;
 use crate::{LayerId, NodeId, Point, SceneGraph};
 
 /// The index trees of another graph that this one takes over (see
@@ -324,8 +325,9 @@ impl SceneGraph {
         roots
     }
 
-    /// Hook: `id`'s points changed from `old` to its current points.
-    pub(crate) fn index_geometry_changed(&mut self, id: NodeId, old: &[Point]) {
+    /// Hook: `id`'s points change as `change` says (the node may not hold its new points
+    /// yet: they are read from `change`).
+    pub(crate) fn index_geometry_changed(&mut self, id: NodeId, change: &PointChange<'_>) {
         if self.indexes.is_empty() {
             return;
         }
@@ -336,8 +338,7 @@ impl SceneGraph {
             return;
         }
         let h = self.index_handle_of(id);
-        let new = &self.nodes[&id].points;
-        let (removed, added) = crate::id::changed_points(old, new);
+        let (removed, added) = change.changed();
         let per_tree = removed.len() + added.len();
         let paths = per_tree * (roots.len() + usize::from(has_layer));
         let mut located = [Located::default(); WARM_LIMIT];
@@ -359,14 +360,13 @@ impl SceneGraph {
         // Tree `k` (the layer index first, then the node indexes of `roots`, as located).
         let located_in = |k: usize| is_located.then(|| &located[k * per_tree..(k + 1) * per_tree]);
         let mut k = 0;
-        let change = PointChange::new(old, new);
         if let Some(t) = self.indexes.layers.get_mut(&layer) {
-            t.apply(h, &change, located_in(k));
+            t.apply(h, change, located_in(k));
             k += 1;
         }
         for &r in &roots {
             let t = self.indexes.nodes.get_mut(&r).expect("listed");
-            t.apply(h, &change, located_in(k));
+            t.apply(h, change, located_in(k));
             k += 1;
         }
         for r in roots {

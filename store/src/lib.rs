@@ -25,6 +25,7 @@ mod id;
 pub mod index;
 mod invariants;
 mod live_view;
+mod point_change;
 mod points;
 pub mod query;
 pub mod snapshot;

@@ -52,6 +52,6 @@ pub use live::LiveKdTree;
 pub(crate) use live::{Entry, Located};
 pub use live_index::LiveIndex;
 pub(crate) use live_index::{LiveIndexes, NO_HANDLE};
-pub(crate) use overlay::{OverlaidTree, PointChange};
+pub(crate) use overlay::OverlaidTree;
 pub(crate) use patch::RowPatch;
 pub use spatial_index::SpatialIndex;

@@ -26,8 +26,8 @@
 //! exceeds the bound.
 
 use super::live::{Entry, LiveKdTree, Located};
+use crate::point_change::PointChange;
 use crate::{Aabb, Point, distance_squared};
-use std::cell::OnceCell;
 use std::sync::Arc;
 
 /// Changed points (removed plus added, after trimming the common prefix and suffix) from
@@ -48,43 +48,6 @@ struct Moved {
     points: Arc<[Point]>,
     /// A box around `points`.
     bbox: Aabb,
-}
-
-/// One item's points before and after a change, as handed to every tree the change goes
-/// to (a layer index and the node indexes above the item). What an overlay keeps of them
-/// (a copy of each list, the new points' box) is made by the first tree that keeps it and
-/// shared by the others.
-pub(crate) struct PointChange<'a> {
-    old: &'a [Point],
-    new: &'a [Point],
-    kept_old: OnceCell<Arc<[Point]>>,
-    kept_new: OnceCell<(Arc<[Point]>, Aabb)>,
-}
-
-impl<'a> PointChange<'a> {
-    /// The change from `old` to `new`.
-    pub(crate) fn new(old: &'a [Point], new: &'a [Point]) -> Self {
-        PointChange {
-            old,
-            new,
-            kept_old: OnceCell::new(),
-            kept_new: OnceCell::new(),
-        }
-    }
-
-    /// The old points, as an overlay keeps them.
-    fn kept_old(&self) -> Arc<[Point]> {
-        Arc::clone(self.kept_old.get_or_init(|| Arc::from(self.old)))
-    }
-
-    /// The new points (not empty) and their box, as an overlay keeps them.
-    fn kept_new(&self) -> (Arc<[Point]>, Aabb) {
-        let (points, bbox) = self.kept_new.get_or_init(|| {
-            let bbox = Aabb::from_points(self.new).expect("not empty");
-            (Arc::from(self.new), bbox)
-        });
-        (Arc::clone(points), *bbox)
-    }
 }
 
 /// A [`LiveKdTree`] plus an overlay of items moved wholesale (see the module docs).
@@ -159,7 +122,7 @@ impl OverlaidTree {
         change: &PointChange<'_>,
         located: Option<&[Located]>,
     ) {
-        let (old, new) = (change.old, change.new);
+        let (old, new) = (change.old_points(), change.new_points());
         match self.moved.binary_search_by_key(&item, |m| m.item) {
             Ok(at) => {
                 let m = &mut self.moved[at];
@@ -178,7 +141,8 @@ impl OverlaidTree {
                     return;
                 }
                 self.overlay_len = self.overlay_len - m.points.len() + new.len();
-                (m.points, m.bbox) = change.kept_new();
+                m.points = change.kept_new();
+                m.bbox = change.new_box().expect("not empty");
             }
             Err(at) => {
                 let (removed, added) = crate::id::changed_points(old, new);
@@ -200,14 +164,13 @@ impl OverlaidTree {
                     }
                     return;
                 }
-                let (points, bbox) = change.kept_new();
                 self.moved.insert(
                     at,
                     Moved {
                         item,
                         in_tree: change.kept_old(),
-                        points,
-                        bbox,
+                        points: change.kept_new(),
+                        bbox: change.new_box().expect("not empty"),
                     },
                 );
                 self.overlay_len += new.len();
