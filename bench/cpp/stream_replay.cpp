@@ -58,7 +58,8 @@ std::vector<std::vector<Edit>> read_trace(const char* path) {
       e.a = c.get<std::uint64_t>();
       switch (e.op) {
         case 0: e.layer = c.get<std::uint32_t>(); break;
-        case 1: {
+        case 1:
+        case 6: {
           e.xyz.resize(3 * std::size_t{c.get<std::uint32_t>()});
           for (float& v : e.xyz) v = c.get<float>();
           break;
@@ -93,6 +94,7 @@ void apply(ygg::SceneGraph& g, const Edit& e) {
     case 3: g.add_label(e.a, e.text); break;
     case 4: g.add_edge(e.a, e.b, e.text); break;
     case 5: g.nest(e.a, e.b); break;
+    case 6: g.append_points(e.a, e.xyz.data(), e.xyz.size() / 3); break;
   }
 }
 

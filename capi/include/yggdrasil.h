@@ -268,6 +268,18 @@ enum ygg_status ygg_graph_set_geometry(struct ygg_graph *graph,
                                        const float *xyz,
                                        size_t count);
 
+// Appends `count` points to a node's geometry, `xyz` holding `3 * count` floats (x y z
+// of each; copied): a growing mesh costs the appended points, not its whole list.
+// `count == 0` changes nothing (`xyz` may then be null). Boxes and indexes above the
+// node are updated; a non-finite coordinate is refused and nothing changes.
+//
+// # Safety
+// `xyz` is null or holds `3 * count` readable floats.
+enum ygg_status ygg_graph_append_points(struct ygg_graph *graph,
+                                        uint64_t node,
+                                        const float *xyz,
+                                        size_t count);
+
 // Sets a string feature (both strings copied).
 //
 // # Safety

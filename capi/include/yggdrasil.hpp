@@ -194,6 +194,13 @@ public:
     set_geometry(node, points.empty() ? nullptr : points.front().data(), points.size());
   }
   void set_point(NodeId node, Point p) { set_geometry(node, p.data(), 1); }
+  /// Appends `count` points of x y z floats to a node's geometry (copied; a growing mesh).
+  void append_points(NodeId node, const float* xyz, std::size_t count) {
+    check(ygg_graph_append_points(handle_, node, xyz, count));
+  }
+  void append_points(NodeId node, const std::vector<Point>& points) {
+    append_points(node, points.empty() ? nullptr : points.front().data(), points.size());
+  }
   void set_feature(NodeId node, const std::string& key, const std::string& value) {
     check(ygg_graph_set_feature_str(handle_, node, key.c_str(), value.c_str()));
   }

@@ -260,6 +260,27 @@ pub unsafe extern "C" fn ygg_graph_set_geometry(
     })
 }
 
+/// Appends `count` points to a node's geometry, `xyz` holding `3 * count` floats (x y z
+/// of each; copied): a growing mesh costs the appended points, not its whole list.
+/// `count == 0` changes nothing (`xyz` may then be null). Boxes and indexes above the
+/// node are updated; a non-finite coordinate is refused and nothing changes.
+///
+/// # Safety
+/// `xyz` is null or holds `3 * count` readable floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ygg_graph_append_points(
+    graph: *mut YggGraph,
+    node: u64,
+    xyz: *const f32,
+    count: usize,
+) -> YggStatus {
+    guard("ygg_graph_append_points", || {
+        // SAFETY: the caller's contract for `xyz` and `count`.
+        let points = unsafe { points_arg(xyz, count, "xyz") }?;
+        edit(graph, |g| g.append_points(NodeId(node), points))
+    })
+}
+
 /// Sets feature `key` of a node (any previous value of the key is replaced).
 fn set_feature(graph: *mut YggGraph, node: u64, key: &str, value: FeatureValue) -> FfiResult {
     edit(graph, |g| g.set_feature(NodeId(node), key, value))

@@ -42,6 +42,13 @@ pub enum Edit {
         /// Its new points.
         points: Vec<Point>,
     },
+    /// [`SceneGraph::append_points`].
+    AppendPoints {
+        /// The node.
+        node: NodeId,
+        /// The points appended to its geometry.
+        points: Vec<Point>,
+    },
     /// [`SceneGraph::set_feature`].
     SetFeature {
         /// The node.
@@ -85,6 +92,7 @@ impl Edit {
         match self {
             Edit::AddNode { node, layer } => g.add_node(*node, *layer),
             Edit::SetGeometry { node, points } => g.set_geometry(*node, points.clone()),
+            Edit::AppendPoints { node, points } => g.append_points(*node, points),
             Edit::SetFeature { node, key, value } => g.set_feature(*node, key, value.clone()),
             Edit::AddLabel { node, label } => g.add_label(*node, label),
             Edit::AddEdge {
@@ -397,19 +405,17 @@ impl SlamReplay {
         let target = layout::layer_with_role(g, LayerRole::UnclaimedMesh { room })
             .and_then(|l| g.layer_nodes(l).map(|n| g.node_id(n)).min());
         let Some(target) = target else { return Ok(0) };
-        let mut points = g
-            .node(target)
-            .map(|n| g.points(n).to_vec())
-            .unwrap_or_default();
         let n = 64;
-        for _ in 0..n {
-            points.push([
-                self.rng.gen_range(b[0]..=b[3]),
-                self.rng.gen_range(b[1]..=b[4]),
-                self.rng.gen_range(0.0..3.0),
-            ]);
-        }
-        s.apply(Edit::SetGeometry {
+        let points = (0..n)
+            .map(|_| {
+                [
+                    self.rng.gen_range(b[0]..=b[3]),
+                    self.rng.gen_range(b[1]..=b[4]),
+                    self.rng.gen_range(0.0..3.0),
+                ]
+            })
+            .collect();
+        s.apply(Edit::AppendPoints {
             node: target,
             points,
         })?;

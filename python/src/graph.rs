@@ -167,6 +167,17 @@ impl PySceneGraph {
         self.edit(|g| g.set_geometry(NodeId(id), pts))
     }
 
+    /// Appends `points` (an `(n, 3)` array-like) to a node's geometry: a growing mesh costs
+    /// the appended points, not its whole list.
+    fn append_points(&self, py: Python<'_>, id: u64, points: &Bound<'_, PyAny>) -> PyResult<()> {
+        if points.len().is_ok_and(|n| n == 0) {
+            return self.edit(|g| g.append_points(NodeId(id), &[]));
+        }
+        let pts = self::points(points, "points")
+            .map_err(|e| MutationError::new_err(e.value(py).to_string()))?;
+        self.edit(|g| g.append_points(NodeId(id), &pts))
+    }
+
     /// Sets feature `key` of a node to a str, int, float or bool.
     fn set_feature(
         &self,

@@ -107,6 +107,8 @@ def test_invalid_mutations_raise_mutation_error_and_change_nothing(tmp_path):
         lambda: g.nest(1, 7),  # already nested
         lambda: g.set_geometry(7, [[float("nan"), 0, 0]]),
         lambda: g.set_geometry(7, [[1, 2]]),
+        lambda: g.append_points(7, [[0, 0, 0], [float("inf"), 0, 0]]),
+        lambda: g.append_points(42, [[0, 0, 0]]),
         lambda: g.set_feature(7, "x", float("nan")),
         lambda: g.set_feature(7, "x", [1, 2]),
         lambda: g.remove_label(7, "table"),
@@ -118,6 +120,16 @@ def test_invalid_mutations_raise_mutation_error_and_change_nothing(tmp_path):
             edit()
     g.save(tmp_path / "after.ygg")
     assert (tmp_path / "after.ygg").read_bytes() == before
+
+
+def test_appending_points_equals_setting_the_longer_list(tmp_path):
+    appended, replaced = small_graph(), small_graph()
+    appended.append_points(7, np.array([[3.0, 1.0, 0.0], [4.0, 2.0, 1.0]], dtype=np.float32))
+    appended.append_points(7, [])
+    replaced.set_geometry(7, [[1.0, 2.0, 0.5], [3.0, 1.0, 0.0], [4.0, 2.0, 1.0]])
+    appended.save(tmp_path / "appended.ygg")
+    replaced.save(tmp_path / "replaced.ygg")
+    assert (tmp_path / "appended.ygg").read_bytes() == (tmp_path / "replaced.ygg").read_bytes()
 
 
 def test_no_writer_raises_transport_error(scene_name):

@@ -204,6 +204,8 @@ class SceneGraph:
         """Removes a node with its edges and nestings."""
     def set_geometry(self, id: int, points: _Points) -> None:
         """Replaces a node's points."""
+    def append_points(self, id: int, points: _Points) -> None:
+        """Appends points to a node's geometry (a growing mesh: costs the appended points)."""
     def set_feature(self, id: int, key: str, value: _FeatureValue) -> None:
         """Sets a feature."""
     def remove_feature(self, id: int, key: str) -> None:

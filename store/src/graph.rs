@@ -419,28 +419,60 @@ impl SceneGraph {
     /// Unknown node or a non-finite coordinate.
     pub fn set_geometry(&mut self, id: NodeId, points: Vec<Point>) -> EditResult {
         self.node(id)?;
-        // A flat pass the compiler vectorises; the position only when it fails.
-        let flat: &[f32] = bytemuck::cast_slice(&points);
-        if !flat.iter().fold(true, |ok, c| ok & c.is_finite()) {
-            let index = points
-                .iter()
-                .position(|p| !p.iter().all(|c| c.is_finite()))
-                .unwrap_or_default();
+        if let Some(index) = crate::id::first_non_finite(&points) {
             return Err(GraphEditError::NonFinitePoint { node: id, index });
         }
-        // The boxes and indexes above take the change from `old` and `points` while the
-        // node holds none; it takes its new points before a box a face of which lost its
-        // last point is recomputed from the sub-tree.
         let node = self.nodes.get_mut(&id).expect("checked");
         let old = std::mem::take(&mut node.points);
-        let layer = node.layer;
-        self.touch_layer(layer, Change::Geometry(id));
         let change = PointChange::new(&old, &points);
-        let emptied = self.geometry_changed(id, &change);
-        self.index_geometry_changed(id, &change);
+        let emptied = self.points_changing(id, &change);
+        self.points_changed(id, points, emptied);
+        Ok(())
+    }
+
+    /// Appends points to a node's geometry (a mesh growing): O(the appended points), where
+    /// [`SceneGraph::set_geometry`] with the longer list compares it whole with the old
+    /// one. Bounding boxes above the node stay exact.
+    ///
+    /// # Errors
+    /// Unknown node or a non-finite coordinate (its index counts the node's points before
+    /// it).
+    pub fn append_points(&mut self, id: NodeId, points: &[Point]) -> EditResult {
+        let had = self.node(id)?.points.len();
+        if let Some(index) = crate::id::first_non_finite(points) {
+            return Err(GraphEditError::NonFinitePoint {
+                node: id,
+                index: had + index,
+            });
+        }
+        if points.is_empty() {
+            return Ok(());
+        }
+        let node = self.nodes.get_mut(&id).expect("checked");
+        let mut all = std::mem::take(&mut node.points);
+        all.extend_from_slice(points);
+        let change = PointChange::appended(&all, had);
+        let emptied = self.points_changing(id, &change);
+        self.points_changed(id, all, emptied);
+        Ok(())
+    }
+
+    /// The boxes and indexes above `id` take `change` while the node holds no points
+    /// (both read them from `change`); returns the boxes a face of which lost its last
+    /// point, for [`Self::points_changed`].
+    fn points_changing(&mut self, id: NodeId, change: &PointChange<'_>) -> Vec<NodeId> {
+        let layer = self.nodes[&id].layer;
+        self.touch_layer(layer, Change::Geometry(id));
+        let emptied = self.geometry_changed(id, change);
+        self.index_geometry_changed(id, change);
+        emptied
+    }
+
+    /// `id` takes its new points; then the boxes that lost a face's last point are
+    /// recomputed from their sub-trees.
+    fn points_changed(&mut self, id: NodeId, points: Vec<Point>, emptied: Vec<NodeId>) {
         self.nodes.get_mut(&id).expect("checked").points = points;
         self.recompute_boxes(emptied);
-        Ok(())
     }
 
     // ---- features and labels ------------------------------------------------------

@@ -145,6 +145,16 @@ impl Aabb {
     }
 }
 
+/// The index of the first point with a non-finite coordinate, if any: a flat pass over
+/// the coordinates the compiler vectorises, the position only when it fails.
+pub(crate) fn first_non_finite(points: &[Point]) -> Option<usize> {
+    let flat: &[f32] = bytemuck::cast_slice(points);
+    if flat.iter().fold(true, |ok, c| ok & c.is_finite()) {
+        return None;
+    }
+    points.iter().position(|p| !p.iter().all(|c| c.is_finite()))
+}
+
 /// The parts of two point lists that differ: `old` and `new` without their common
 /// prefix and suffix (points compared bit for bit). Moving one point of a node, or
 /// appending points to it, then costs index and box updates for those points only.

@@ -12,17 +12,40 @@ use std::sync::Arc;
 pub(crate) struct PointChange<'a> {
     old: &'a [Point],
     new: &'a [Point],
+    /// `old` and `new` without their common prefix and suffix.
+    removed: &'a [Point],
+    added: &'a [Point],
     new_box: OnceCell<Option<Aabb>>,
     kept_old: OnceCell<Arc<[Point]>>,
     kept_new: OnceCell<Arc<[Point]>>,
 }
 
 impl<'a> PointChange<'a> {
-    /// The change from `old` to `new`.
+    /// The change from `old` to `new` (compared once, point by point, for the parts that
+    /// differ).
     pub(crate) fn new(old: &'a [Point], new: &'a [Point]) -> Self {
+        let (removed, added) = crate::id::changed_points(old, new);
+        Self::with_parts(old, new, removed, added)
+    }
+
+    /// The change that appends `points[appended_from..]` to `points[..appended_from]`
+    /// (nothing compared).
+    pub(crate) fn appended(points: &'a [Point], appended_from: usize) -> Self {
+        let (old, added) = points.split_at(appended_from);
+        Self::with_parts(old, points, &[], added)
+    }
+
+    fn with_parts(
+        old: &'a [Point],
+        new: &'a [Point],
+        removed: &'a [Point],
+        added: &'a [Point],
+    ) -> Self {
         PointChange {
             old,
             new,
+            removed,
+            added,
             new_box: OnceCell::new(),
             kept_old: OnceCell::new(),
             kept_new: OnceCell::new(),
@@ -42,7 +65,7 @@ impl<'a> PointChange<'a> {
     /// The parts that differ: the old and new points without their common prefix and
     /// suffix (see [`crate::id::changed_points`]).
     pub(crate) fn changed(&self) -> (&'a [Point], &'a [Point]) {
-        crate::id::changed_points(self.old, self.new)
+        (self.removed, self.added)
     }
 
     /// The box of the new points (`None` for none).

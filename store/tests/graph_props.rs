@@ -278,3 +278,65 @@ fn nesting_changes_only_the_child_layer() {
         query::subtree(&g, NodeId(1))
     );
 }
+
+/// Appending points equals setting the concatenation (points, boxes, layer and node
+/// index answers); a non-finite appended point is refused with its index in the node's
+/// list, changing nothing.
+#[test]
+fn appending_points_equals_setting_the_longer_list() {
+    let build = || {
+        let mut g = SceneGraph::new();
+        let rooms = g.add_layer("rooms").unwrap();
+        let mesh = g.add_layer("mesh").unwrap();
+        g.add_layer_edge(rooms, mesh).unwrap();
+        g.add_node(NodeId(1), rooms).unwrap();
+        g.enable_bounding_box(NodeId(1)).unwrap();
+        g.add_node(NodeId(2), mesh).unwrap();
+        g.nest(NodeId(1), NodeId(2)).unwrap();
+        g.enable_layer_index(mesh).unwrap();
+        g.enable_node_index(NodeId(1)).unwrap();
+        g
+    };
+    let grid = |k: usize| -> Vec<[f32; 3]> {
+        (0..k)
+            .map(|i| [(i % 7) as f32, (i % 5) as f32 * 0.5, (i / 35) as f32])
+            .collect()
+    };
+    let (mut appended, mut set) = (build(), build());
+    let mut all: Vec<[f32; 3]> = Vec::new();
+    for (step, k) in [3, 40, 1, 200].into_iter().enumerate() {
+        let tail: Vec<[f32; 3]> = grid(k)
+            .into_iter()
+            .map(|p| [p[0] + step as f32, p[1], p[2] - step as f32])
+            .collect();
+        appended.append_points(NodeId(2), &tail).unwrap();
+        all.extend_from_slice(&tail);
+        set.set_geometry(NodeId(2), all.clone()).unwrap();
+        appended.check_invariants().unwrap();
+        assert_eq!(
+            fingerprint(&appended),
+            fingerprint(&set),
+            "after step {step}"
+        );
+        for c in [[0.0, 0.0, 0.0], [3.5, 1.0, -2.0], [9.0, 9.0, 9.0]] {
+            assert_eq!(
+                query::nearest_nodes(&appended, Scope::Graph, c, 3),
+                query::nearest_nodes(&set, Scope::Graph, c, 3)
+            );
+            assert_eq!(
+                query::nearest_in_subtree(&appended, NodeId(1), c, 3),
+                query::nearest_in_subtree(&set, NodeId(1), c, 3)
+            );
+        }
+    }
+    let before = fingerprint(&appended);
+    let had = all.len();
+    assert_eq!(
+        appended.append_points(NodeId(2), &[[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0]]),
+        Err(ygg_store::GraphEditError::NonFinitePoint {
+            node: NodeId(2),
+            index: had + 1
+        })
+    );
+    assert_eq!(fingerprint(&appended), before);
+}

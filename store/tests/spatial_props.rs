@@ -33,6 +33,8 @@ enum Op {
     SetCluster(u8, [i8; 3], u8),
     /// Every point of the node moved by the same offset (a rigid move).
     Translate(u8, [i8; 3]),
+    /// Points appended to the node's geometry (a mesh growing).
+    Append(u8, Vec<[i8; 3]>),
     Nest(u8, u8),
     Unnest(u8),
     EnableBox(u8),
@@ -61,6 +63,7 @@ fn op() -> impl Strategy<Value = Op> {
         1 => (n.clone(), point(), 2u8..40).prop_map(|(a, p, k)| Op::SetDuplicates(a, p, k)),
         2 => (n.clone(), point(), 8u8..60).prop_map(|(a, p, k)| Op::SetCluster(a, p, k)),
         4 => (n.clone(), [-2i8..3, -2i8..3, -1i8..2]).prop_map(|(a, d)| Op::Translate(a, d)),
+        3 => (n.clone(), prop::collection::vec(point(), 0..40)).prop_map(|(a, p)| Op::Append(a, p)),
         5 => (n.clone(), n.clone()).prop_map(|(a, b)| Op::Nest(a, b)),
         3 => n.clone().prop_map(Op::Unnest),
         1 => n.clone().prop_map(Op::EnableBox),
@@ -174,6 +177,10 @@ fn apply(g: &mut SceneGraph, op: &Op) {
             }
             None => Ok(()),
         },
+        Op::Append(n, pts) => {
+            let pts: Vec<Point> = pts.iter().map(grid).collect();
+            g.append_points(node(*n), &pts)
+        }
         Op::Nest(a, b) => g.nest(node(*a), node(*b)),
         Op::Unnest(n) => g.unnest(node(*n)),
         Op::EnableBox(n) => g.enable_bounding_box(node(*n)),

@@ -12,6 +12,7 @@
 //! | 3 | add_label | `u64` node, str label |
 //! | 4 | add_edge | `u64` source, `u64` target, str description |
 //! | 5 | nest | `u64` parent, `u64` child |
+//! | 6 | append_points | `u64` node, `u32` n, `3n` x `f32` |
 //!
 //! A str is a `u32` byte length and the UTF-8 bytes.
 
@@ -36,8 +37,12 @@ pub fn encode(ticks: &[Vec<Edit>]) -> Vec<u8> {
                     out.extend_from_slice(&node.0.to_le_bytes());
                     out.extend_from_slice(&layer.0.to_le_bytes());
                 }
-                Edit::SetGeometry { node, points } => {
-                    out.push(1);
+                Edit::SetGeometry { node, points } | Edit::AppendPoints { node, points } => {
+                    out.push(if matches!(edit, Edit::SetGeometry { .. }) {
+                        1
+                    } else {
+                        6
+                    });
                     out.extend_from_slice(&node.0.to_le_bytes());
                     out.extend_from_slice(&(points.len() as u32).to_le_bytes());
                     for v in points.iter().flatten() {

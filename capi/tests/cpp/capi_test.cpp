@@ -84,8 +84,11 @@ ygg_graph* build_graph() {
     EXPECT_OK(ygg_graph_nest(g, o.room, o.id));
     EXPECT_OK(ygg_graph_enable_bounding_box(g, o.id));
     EXPECT_OK(ygg_graph_add_node(g, o.id + 100, mesh));
-    const float xyz[6] = {o.x, 0.0f, 0.0f, o.x, 0.5f, 0.0f};
-    EXPECT_OK(ygg_graph_set_geometry(g, o.id + 100, xyz, 2));
+    // Two points: the first set, the second appended (the queries below see both).
+    const float first[3] = {o.x, 0.0f, 0.0f};
+    const float second[3] = {o.x, 0.5f, 0.0f};
+    EXPECT_OK(ygg_graph_set_geometry(g, o.id + 100, first, 1));
+    EXPECT_OK(ygg_graph_append_points(g, o.id + 100, second, 1));
     EXPECT_OK(ygg_graph_nest(g, o.id, o.id + 100));
   }
   EXPECT_OK(ygg_graph_set_feature_str(g, 10, "color", "red"));
@@ -121,6 +124,9 @@ void graph_mutations_and_their_errors(ygg_graph* g) {
   EXPECT_STATUS(ygg_graph_set_geometry(g, 110, nullptr, 3), YGG_STATUS_NULL_ARGUMENT);
   const float nan_point[3] = {NAN, 0.0f, 0.0f};
   EXPECT(ygg_graph_set_geometry(g, 110, nan_point, 1) != YGG_STATUS_OK);
+  EXPECT_STATUS(ygg_graph_append_points(g, 110, nullptr, 2), YGG_STATUS_NULL_ARGUMENT);
+  EXPECT_STATUS(ygg_graph_append_points(g, 110, nan_point, 1), YGG_STATUS_GRAPH_EDIT);
+  EXPECT(error_has("non-finite"));
   EXPECT_STATUS(ygg_graph_set_feature_float(g, 10, "mass", NAN), YGG_STATUS_GRAPH_EDIT);
   EXPECT_STATUS(ygg_graph_set_feature_int(g, 999, "legs", 1), YGG_STATUS_GRAPH_EDIT);
   EXPECT(error_has("unknown node 999"));

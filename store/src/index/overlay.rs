@@ -145,7 +145,7 @@ impl OverlaidTree {
                 m.bbox = change.new_box().expect("not empty");
             }
             Err(at) => {
-                let (removed, added) = crate::id::changed_points(old, new);
+                let (removed, added) = change.changed();
                 if removed.len() + added.len() < MOVE_MIN || old.is_empty() || new.is_empty() {
                     let shape = self.tree.shape();
                     let at = |i: usize| located.and_then(|l| l.get(i)).copied();

@@ -15,6 +15,7 @@ pub enum Op {
     AddNode(u8, u8),
     RemoveNode(u8),
     SetGeometry(u8, Vec<[i8; 3]>),
+    AppendPoints(u8, Vec<[i8; 3]>),
     SetFeature(u8, u8, i8),
     RemoveFeature(u8, u8),
     AddLabel(u8, u8),
@@ -26,6 +27,7 @@ pub enum Op {
     EnableBox(u8),
     DisableBox(u8),
     NonFinite(u8),
+    NonFiniteAppend(u8),
     EnableLayerIndex(u8),
     DisableLayerIndex(u8),
     EnableNodeIndex(u8),
@@ -44,6 +46,7 @@ pub fn op() -> impl Strategy<Value = Op> {
         6 => (n.clone(), l.clone()).prop_map(|(a, b)| Op::AddNode(a, b)),
         1 => n.clone().prop_map(Op::RemoveNode),
         4 => (n.clone(), prop::collection::vec(any::<[i8; 3]>(), 0..4)).prop_map(|(a, p)| Op::SetGeometry(a, p)),
+        2 => (n.clone(), prop::collection::vec(any::<[i8; 3]>(), 0..4)).prop_map(|(a, p)| Op::AppendPoints(a, p)),
         2 => (n.clone(), 0u8..3, any::<i8>()).prop_map(|(a, k, v)| Op::SetFeature(a, k, v)),
         1 => (n.clone(), 0u8..3).prop_map(|(a, k)| Op::RemoveFeature(a, k)),
         2 => (n.clone(), 0u8..4).prop_map(|(a, k)| Op::AddLabel(a, k)),
@@ -55,6 +58,7 @@ pub fn op() -> impl Strategy<Value = Op> {
         2 => n.clone().prop_map(Op::EnableBox),
         1 => n.clone().prop_map(Op::DisableBox),
         1 => n.clone().prop_map(Op::NonFinite),
+        1 => n.clone().prop_map(Op::NonFiniteAppend),
         1 => l.clone().prop_map(Op::EnableLayerIndex),
         1 => l.prop_map(Op::DisableLayerIndex),
         1 => n.clone().prop_map(Op::EnableNodeIndex),
@@ -82,6 +86,10 @@ pub fn apply(g: &mut SceneGraph, op: &Op) -> Result<(), ygg_store::GraphEditErro
             node(*n),
             pts.iter().map(|p| p.map(|c| f32::from(c) / 8.0)).collect(),
         ),
+        Op::AppendPoints(n, pts) => {
+            let pts: Vec<[f32; 3]> = pts.iter().map(|p| p.map(|c| f32::from(c) / 8.0)).collect();
+            g.append_points(node(*n), &pts)
+        }
         Op::SetFeature(n, k, v) => {
             let value = match k {
                 0 => FeatureValue::Str(format!("v{}", v % 3)),
@@ -100,6 +108,9 @@ pub fn apply(g: &mut SceneGraph, op: &Op) -> Result<(), ygg_store::GraphEditErro
         Op::EnableBox(n) => g.enable_bounding_box(node(*n)),
         Op::DisableBox(n) => g.disable_bounding_box(node(*n)),
         Op::NonFinite(n) => g.set_geometry(node(*n), vec![[0.0, f32::NAN, 1.0]]),
+        Op::NonFiniteAppend(n) => {
+            g.append_points(node(*n), &[[1.0, 2.0, 3.0], [f32::INFINITY, 0.0, 0.0]])
+        }
         Op::EnableLayerIndex(l) => g.enable_layer_index(layer(g, *l)),
         Op::DisableLayerIndex(l) => g.disable_layer_index(layer(g, *l)),
         Op::EnableNodeIndex(n) => g.enable_node_index(node(*n)),
