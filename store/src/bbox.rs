@@ -79,6 +79,15 @@ fn add_points(node: &mut Node, points: &[Point], around: Option<Aabb>) -> bool {
     grown != b
 }
 
+/// Makes an enabled box exactly the box of `points` (with `around`, their box): its
+/// bounds, face counts and point count.
+fn set_box_to(node: &mut Node, points: &[Point], around: Option<Aabb>) {
+    node.aabb = None;
+    node.face_counts = [0; 6];
+    node.box_points = points.len() as u64;
+    add_points(node, points, around);
+}
+
 /// Removes points (with `around`, their box) from an enabled box's counts; returns
 /// whether a face lost its last point (the box must then be recomputed). Points
 /// strictly inside the box cost nothing beyond `around`.
@@ -130,10 +139,7 @@ impl SceneGraph {
     pub(crate) fn recompute_box(&mut self, id: NodeId) {
         let points = self.all_subtree_points(id);
         let node = self.nodes.get_mut(&id).expect("exists");
-        node.aabb = None;
-        node.face_counts = [0; 6];
-        node.box_points = points.len() as u64;
-        add_points(node, &points, Aabb::from_points(&points));
+        set_box_to(node, &points, Aabb::from_points(&points));
         let layer = node.layer;
         self.touch_layer(layer, Change::Node(id));
     }
@@ -183,11 +189,9 @@ impl SceneGraph {
                 continue;
             }
             let changed = if node.box_points == removed.len() as u64 {
-                let before = node.aabb.take();
+                let before = node.aabb;
                 removed_box.get_or_insert(before);
-                node.face_counts = [0; 6];
-                add_points(node, added, added_box);
-                node.box_points = added.len() as u64;
+                set_box_to(node, added, added_box);
                 node.aabb != before
             } else {
                 let grew = add_points(node, added, added_box);
