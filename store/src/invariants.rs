@@ -137,9 +137,10 @@ impl SceneGraph {
             }
             if node.bbox_enabled {
                 let exact = self.brute_subtree_box(id);
+                let points = self.brute_subtree_points(id);
                 if let Some(b) = exact {
                     let mut counts = [0u32; 6];
-                    for p in self.brute_subtree_points(id) {
+                    for p in &points {
                         for a in 0..3 {
                             counts[a] += u32::from(p[a] == b.min[a]);
                             counts[3 + a] += u32::from(p[a] == b.max[a]);
@@ -152,11 +153,11 @@ impl SceneGraph {
                         ));
                     }
                 }
-                let points = self.brute_subtree_points(id).len() as u64;
-                if node.box_points != points {
+                if node.box_points != points.len() as u64 {
                     return Err(format!(
-                        "node {id} box counts {} points, its sub-tree holds {points}",
-                        node.box_points
+                        "node {id} box counts {} points, its sub-tree holds {}",
+                        node.box_points,
+                        points.len()
                     ));
                 }
                 if node.aabb != exact {
