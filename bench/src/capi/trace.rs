@@ -17,11 +17,21 @@
 //! A str is a `u32` byte length and the UTF-8 bytes.
 
 use ygg_dsg::replay::Edit;
-use ygg_store::FeatureValue;
+use ygg_store::{FeatureValue, NodeId, Point};
 
 fn str_field(out: &mut Vec<u8>, s: &str) {
     out.extend_from_slice(&(s.len() as u32).to_le_bytes());
     out.extend_from_slice(s.as_bytes());
+}
+
+/// An edit of a node's points: `op`, the node, the point count and the coordinates.
+fn points_edit(out: &mut Vec<u8>, op: u8, node: NodeId, points: &[Point]) {
+    out.push(op);
+    out.extend_from_slice(&node.0.to_le_bytes());
+    out.extend_from_slice(&(points.len() as u32).to_le_bytes());
+    for v in points.iter().flatten() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
 }
 
 /// The trace file's bytes for `ticks` (each tick's edits in order).
@@ -37,18 +47,8 @@ pub fn encode(ticks: &[Vec<Edit>]) -> Vec<u8> {
                     out.extend_from_slice(&node.0.to_le_bytes());
                     out.extend_from_slice(&layer.0.to_le_bytes());
                 }
-                Edit::SetGeometry { node, points } | Edit::AppendPoints { node, points } => {
-                    out.push(if matches!(edit, Edit::SetGeometry { .. }) {
-                        1
-                    } else {
-                        6
-                    });
-                    out.extend_from_slice(&node.0.to_le_bytes());
-                    out.extend_from_slice(&(points.len() as u32).to_le_bytes());
-                    for v in points.iter().flatten() {
-                        out.extend_from_slice(&v.to_le_bytes());
-                    }
-                }
+                Edit::SetGeometry { node, points } => points_edit(&mut out, 1, *node, points),
+                Edit::AppendPoints { node, points } => points_edit(&mut out, 6, *node, points),
                 Edit::SetFeature { node, key, value } => {
                     out.push(2);
                     out.extend_from_slice(&node.0.to_le_bytes());
