@@ -28,9 +28,12 @@
 //! [`layer_roles`]).
 
 mod role;
+mod whereabouts;
 
 #[doc(inline)]
 pub use self::role::{LayerRole, layer_roles, layer_with_role};
+#[doc(inline)]
+pub use self::whereabouts::{AgentPose, RoomScope, newest_pose, owners, room_of, room_scope};
 
 use crate::{DsgGraph, NodeKind};
 use rustc_hash::FxHashMap;
