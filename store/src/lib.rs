@@ -14,32 +14,22 @@
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");
 
-mod bbox;
 mod bytes;
-mod change;
 mod error;
 mod feature;
 mod graph;
-mod graph_indexes;
 mod id;
 pub mod index;
-mod invariants;
-mod live_view;
-mod point_change;
 mod points;
 pub mod query;
 pub mod snapshot;
-mod sync;
-mod touch_log;
 mod view;
 
 pub use error::{EditResult, GraphEditError, SnapshotError};
 pub use feature::{FeatureRef, FeatureValue};
-pub use graph::{Node, SceneGraph};
+pub use graph::{Node, SceneGraph, SyncReport, TouchMark};
 pub use id::{Aabb, LayerId, NodeId, Point, distance_squared};
 pub use points::{Points, PointsIter};
 pub use query::Scope;
 pub use snapshot::{ArchivedScene, SnapshotFile};
-pub use sync::SyncReport;
-pub use touch_log::TouchMark;
 pub use view::{EdgeRef, SceneView};

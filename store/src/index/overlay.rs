@@ -26,7 +26,7 @@
 //! exceeds the bound.
 
 use super::live::{Entry, LiveKdTree, Located};
-use crate::point_change::PointChange;
+use crate::graph::PointChange;
 use crate::{Aabb, Point, distance_squared};
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! [`SegmentCache`]: incremental layer segments and manifests for a publishing writer.
 //!
 //! The cache keeps the columns it last built for each layer; every mutation records
-//! what it changed in the layer's change journal (`crate::change`). When the journal
+//! what it changed in the layer's change journal (`crate::graph::change_journal`). When the journal
 //! starts at the generation of the cached segment and the rows kept their places since
 //! — nodes removed only from the end (the largest ids), new nodes only with ids above
 //! every remaining one, no index enabled or disabled — the next build looks up only the
@@ -30,8 +30,8 @@ use super::index_patch::{PointChanges, update_layer_index};
 use super::rejoin::cut_field_offsets;
 use super::schema::{ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT};
 use crate::bytes::{SegmentBytes, archive};
-use crate::change::LayerChanges;
 use crate::graph::Layer;
+use crate::graph::LayerChanges;
 use crate::{LayerId, NodeId, SceneGraph};
 use rustc_hash::FxHashMap;
 use std::ops::Range;

@@ -14,11 +14,11 @@
 //! A node index changes when any node below its root changes, so the hooks touch the
 //! root's layer: a node index is republished with its root's layer.
 
-use crate::change::Change;
+use super::change_journal::Change;
+use super::point_change::PointChange;
+use super::scene_graph::Node;
 use crate::error::{EditResult, GraphEditError};
-use crate::graph::Node;
 use crate::index::{Entry, LiveIndexes, LiveKdTree, Located, NO_HANDLE, OverlaidTree};
-use crate::point_change::PointChange;
 use crate::{LayerId, NodeId, Point, SceneGraph};
 
 /// The index trees of another graph that this one takes over (see

@@ -1,7 +1,7 @@
 //! [`SceneView`] for the live [`SceneGraph`].
 
+use super::scene_graph::{Node, SceneGraph};
 use crate::feature::StoredValue;
-use crate::graph::{Node, SceneGraph};
 use crate::index::SpatialIndex;
 use crate::view::{EdgeRef, SceneView};
 use crate::{Aabb, FeatureRef, LayerId, NodeId, Points};

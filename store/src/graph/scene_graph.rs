@@ -1,24 +1,13 @@
-//! The live scene graph and its mutations.
-//!
-//! # Invariants (checked by [`SceneGraph::check_invariants`])
-//! - Layers form a DAG; layer names are unique.
-//! - Every node belongs to exactly one layer and appears once in that layer's node list.
-//! - Edges join two distinct nodes of the same layer; `out_edges` and `in_edges` mirror
-//!   each other and are sorted by the other end's id.
-//! - A node has at most one parent; the parent's layer has a DAG edge to the child's
-//!   layer; `children` lists mirror parent pointers and are sorted by id.
-//! - A node with its bounding box enabled holds the exact AABB of every point in its
-//!   sub-tree (or none when the sub-tree has no point).
-//! - The inverted label and key indexes hold exactly the nodes carrying each term.
-//!
-//! Every mutation validates first and changes nothing when it returns an error.
+//! [`SceneGraph`] and [`Node`]: the live graph's storage (layers, nodes, strings, the
+//! inverted label and key indexes) and its mutations. The invariants they keep are listed
+//! in the [`crate::graph`] module docs.
 
-use crate::change::{Change, LayerChanges};
+use super::change_journal::{Change, LayerChanges};
+use super::point_change::PointChange;
+use super::touch_log::{TouchLog, TouchMark};
 use crate::error::{EditResult, GraphEditError};
 use crate::feature::{FeatureValue, Interner, StoredValue, Sym};
 use crate::index::LiveIndexes;
-use crate::point_change::PointChange;
-use crate::touch_log::TouchLog;
 use crate::{Aabb, LayerId, NodeId, Point};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::BTreeMap;
@@ -138,6 +127,19 @@ impl SceneGraph {
     /// The generation of the layer set and DAG.
     pub fn structure_generation(&self) -> u64 {
         self.structure_generation
+    }
+
+    /// A point after every change made so far, for [`SceneGraph::layers_touched_since`].
+    pub fn touch_mark(&self) -> TouchMark {
+        self.touches.mark()
+    }
+
+    /// The layers whose generation changed after `mark` (or that were added after it),
+    /// ascending; removed layers are not listed. O(changes since the mark, amortised),
+    /// whatever the number of layers: how a publisher finds what to send. `None` when
+    /// `mark` is not this graph's (a mark of another graph, or taken before a clone).
+    pub fn layers_touched_since(&self, mark: TouchMark) -> Option<Vec<LayerId>> {
+        self.touches.touched_since(mark)
     }
 
     fn layer(&self, id: LayerId) -> EditResult<&Layer> {

@@ -6,9 +6,9 @@
 //! box recomputed from the sub-tree. Floors, walls and ceilings put many points on one
 //! face, so a count rarely reaches zero.
 
-use crate::change::Change;
-use crate::graph::{Node, SceneGraph};
-use crate::point_change::PointChange;
+use super::change_journal::Change;
+use super::point_change::PointChange;
+use super::scene_graph::{Node, SceneGraph};
 use crate::{Aabb, NodeId, Point};
 
 /// How many of `points` lie on each face of `b` (`==` on the face's coordinate; min x,

@@ -10,9 +10,9 @@
 //! id. A node whose content is the same in both graphs is never touched, so its layer
 //! keeps its generation unless another node of the layer changes.
 
+use super::scene_graph::Node;
+use super::spatial_indexes::{AdoptedTrees, IndexScope};
 use crate::feature::StoredValue;
-use crate::graph::Node;
-use crate::graph_indexes::{AdoptedTrees, IndexScope};
 use crate::index::{LiveIndexes, OverlaidTree};
 use crate::{EditResult, FeatureValue, LayerId, NodeId, SceneGraph};
 use rustc_hash::{FxHashMap, FxHashSet};

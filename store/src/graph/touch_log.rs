@@ -1,8 +1,9 @@
 //! [`TouchLog`]: which layers changed after a given point, so that a publisher finds the
-//! changed layers in O(changed), not by looking at every layer of a large building, and
-//! the graph's API over it ([`SceneGraph::touch_mark`], [`SceneGraph::layers_touched_since`]).
+//! changed layers in O(changed), not by looking at every layer of a large building (the
+//! graph's API over it: [`crate::SceneGraph::touch_mark`],
+//! [`crate::SceneGraph::layers_touched_since`]).
 
-use crate::{LayerId, SceneGraph};
+use crate::LayerId;
 use rustc_hash::FxHashSet;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -111,21 +112,6 @@ impl TouchLog {
         layers.sort_unstable();
         layers.dedup();
         Some(layers)
-    }
-}
-
-impl SceneGraph {
-    /// A point after every change made so far, for [`SceneGraph::layers_touched_since`].
-    pub fn touch_mark(&self) -> TouchMark {
-        self.touches.mark()
-    }
-
-    /// The layers whose generation changed after `mark` (or that were added after it),
-    /// ascending; removed layers are not listed. O(changes since the mark, amortised),
-    /// whatever the number of layers: how a publisher finds what to send. `None` when
-    /// `mark` is not this graph's (a mark of another graph, or taken before a clone).
-    pub fn layers_touched_since(&self, mark: TouchMark) -> Option<Vec<LayerId>> {
-        self.touches.touched_since(mark)
     }
 }
 

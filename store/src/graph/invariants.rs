@@ -2,7 +2,7 @@
 //! scratch, what every mutation keeps up to date (the invariants listed in the docs of
 //! the graph module).
 
-use crate::graph::SceneGraph;
+use super::scene_graph::SceneGraph;
 use crate::{Aabb, LayerId, NodeId, Point};
 
 impl SceneGraph {
