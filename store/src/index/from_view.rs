@@ -2,7 +2,7 @@
 //! not index: [`build_layer_index`], [`build_subtree_index`], and [`IndexCache`], which
 //! keeps them across generations for layers that did not change.
 
-use super::kdtree::{KdIndex, build_tree};
+use super::archived::{KdIndex, build_tree};
 use crate::query::visit_subtree;
 use crate::{LayerId, NodeId, SceneView};
 use rustc_hash::FxHashMap;

@@ -5,7 +5,7 @@
 //! | index | type | kept by | items |
 //! |---|---|---|---|
 //! | live | [`LiveIndex`] over a [`LiveKdTree`] plus an overlay of nodes moved wholesale | [`crate::SceneGraph`], updated by every mutation | node handles |
-//! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` (a layer index: plus the rows patched since it was built, `patch.rs`) | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
+//! | archived | [`ArchivedIndex`] over kiddo's archived `ImmutableKdTree` (a layer index: plus the rows patched since it was built, `archived/patched_rows.rs`) | the layer segment of a snapshot, queried zero-copy | rows / id-table positions |
 //! | reader-built | [`KdIndex`]: kiddo's `ImmutableKdTree`, kept archived | a reader ([`build_layer_index`], [`build_subtree_index`], [`IndexCache`]) | id-table positions |
 //!
 //! kiddo builds the snapshot's and the readers' trees and answers their radius queries.
@@ -25,33 +25,24 @@
 //! 19.2 bytes live (leaves are bulk-built 7/8 full so that inserts rarely split one).
 //! The live indexes of a graph share one handle table besides (item to node id: 8 bytes
 //! per indexed node, grown by an eighth; [`crate::SceneGraph::index_handle_bytes`]).
-
 //!
 //! # Modules, bottom up
-//! `spatial_index` (the trait), `walk` (the nearest walk over a kd-tree accessor), `live`
-//! (the live kd-tree), `overlay` (moved nodes over it), `patch` (changed rows over an archived layer index), `live_index` (the live graph's
-//! indexes), `archived_layout` (kiddo's archived layout, checked), `kdtree` (archived and
-//! reader-built indexes), `from_view` (indexes built from any view).
+//! `spatial_index` (the trait), `walk` (the nearest walk over a kd-tree accessor),
+//! `live/` (the live graph's indexes: `kdtree/`, the live kd-tree; `overlay`, moved nodes
+//! over it; `graph_indexes`, one graph's indexes and their handle table), `archived/`
+//! (kiddo's trees: `layout`, kiddo's archived layout, checked; `kdtree`, archived and
+//! reader-built indexes; `patched_rows`, changed rows over an archived layer index),
+//! `from_view` (indexes built from any view).
 
-mod archived_layout;
+mod archived;
 mod from_view;
-mod kdtree;
 mod live;
-mod live_index;
-mod overlay;
-mod patch;
 mod spatial_index;
 mod walk;
 
-pub(crate) use archived_layout::check_tree;
-pub use archived_layout::{ArchivedKdTree, KdTree};
+pub use archived::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree};
+pub(crate) use archived::{RowPatch, build_tree, check_tree};
 pub use from_view::{IndexCache, build_layer_index, build_subtree_index};
-pub(crate) use kdtree::build_tree;
-pub use kdtree::{ArchivedIndex, KdIndex};
-pub use live::LiveKdTree;
-pub(crate) use live::{Entry, Located};
-pub use live_index::LiveIndex;
-pub(crate) use live_index::{LiveIndexes, NO_HANDLE};
-pub(crate) use overlay::OverlaidTree;
-pub(crate) use patch::RowPatch;
+pub(crate) use live::{Entry, LiveIndexes, Located, NO_HANDLE, OverlaidTree};
+pub use live::{LiveIndex, LiveKdTree};
 pub use spatial_index::SpatialIndex;

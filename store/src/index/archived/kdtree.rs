@@ -6,22 +6,22 @@
 //! radius queries (`within`). Nearest-node search needs one branch-and-bound pass that
 //! knows about nodes and ties (kiddo's `nearest_n(2)` costs 1.8× its `nearest_one` in
 //! instructions, and neither breaks ties by node id), so the nearest walk
-//! (`super::walk`) reads the archived layout itself through [`ArchivedTreeAccess`]:
+//! (`crate::index::walk`) reads the archived layout itself through [`ArchivedTreeAccess`]:
 //! stems in Eytzinger order (root 1, children `2s` and `2s + 1`, split dimension
 //! `level % 3`, above when `c[dim] >= pivot`), leaf `s - 2^levels` at the bottom, leaves
 //! as tiles of x's, y's, z's and items. The layout is read through the checked mirror
-//! of `super::archived_layout`; the walk indexes only with bounds-checked slices.
+//! of `super::layout`; the walk indexes only with bounds-checked slices.
 
 #![allow(
     unsafe_code,
     reason = "re-deriving a reader-built tree from the bytes it was archived into"
 )]
 
-use super::archived_layout::{ArchivedKdTree, KdTree, layout, tile_widths};
-use super::patch::RowPatch;
-use super::spatial_index::{SpatialIndex, prefetch};
-use super::walk::{self, Cell, KdTreeAccessor, TileVisitor};
+use super::layout::{ArchivedKdTree, KdTree, layout, tile_widths};
+use super::patched_rows::RowPatch;
 use crate::bytes::{SegmentBytes, archive};
+use crate::index::spatial_index::{SpatialIndex, prefetch};
+use crate::index::walk::{self, Cell, KdTreeAccessor, TileVisitor};
 use crate::{NodeId, Point};
 use kiddo::SquaredEuclidean;
 use rkyv::primitive::ArchivedUsize;

@@ -25,7 +25,7 @@
 //! [`crate::distance_squared`] to any point in the box, evaluated in the same order)
 //! exceeds the bound.
 
-use super::live::{Entry, LiveKdTree, Located};
+use super::kdtree::{Entry, LiveKdTree, Located};
 use crate::graph::PointChange;
 use crate::{Aabb, Point, distance_squared};
 use std::sync::Arc;

@@ -74,7 +74,7 @@ impl<'a> RowPatch<'a> {
     }
 
     /// Reports every patched point within the current bound (see
-    /// [`super::SpatialIndex::nearest_visit`]), starting from `bound`.
+    /// [`crate::index::SpatialIndex::nearest_visit`]), starting from `bound`.
     pub(crate) fn nearest_visit<F: FnMut(f32, u32) -> f32>(
         &self,
         c: &Point,

@@ -5,8 +5,8 @@
 //! Handles are dense `u32`s naming nodes: a node keeps its handle (`u32::MAX` until it
 //! has one) and `ids[handle]` is the node.
 
-use super::OverlaidTree;
-use super::spatial_index::{SpatialIndex, prefetch};
+use super::overlay::OverlaidTree;
+use crate::index::spatial_index::{SpatialIndex, prefetch};
 use crate::{LayerId, NodeId, Point};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
