@@ -24,43 +24,42 @@
 //! Inside a layer segment nodes are addressed by a dense `u32` row (their rank by id).
 //! A row is valid only within that layer generation.
 //!
-//! # Modules
-//! `schema` (the archived types), `archive` (archiving the live graph), `by_parent`
-//! (the rows-by-parent column), `cache` (incremental segments for a publishing writer), `index_patch` (its patched layer
-//! indexes), `file` (`.ygg` files), `validate`
-//! (checking untrusted bytes), `rejoin` (what a reader need not check again in its next
-//! cut), `view` ([`ArchivedScene`]).
+//! # Modules: what a reader runs apart from what only a publishing writer runs
+//! Shared: `schema` (the archived types both sides agree on), `chunking` (chunk sizes,
+//! which layers and trees travel as chunks, chunk segment ids).
+//!
+//! `read/`, what a reader runs on untrusted bytes: `validate` (bytecheck and the
+//! consistency pass), `chunk_check` (chunks on their own and against their layer), `cut`
+//! (joining and checking a cut: [`ArchivedScene`]), `rejoin` (what a reader need not
+//! check again in its next cut), `scene_view` (the [`crate::SceneView`] of an
+//! [`ArchivedScene`]), `file` (`.ygg` files: [`SnapshotFile`]; `SceneGraph::save`).
+//!
+//! `publish/`, what only a publishing writer runs on its live graph: `archive`
+//! (archiving a layer or the whole graph), `by_parent` (the rows-by-parent column),
+//! `chunk_source` (chunks archived from the live columns), `chunk_state` (which chunks a
+//! patch touched), `layer_index_update` (patching or folding a layer index), and
+//! `segment_cache` ([`SegmentCache`], incremental segments per publish).
 
-mod archive;
-mod by_parent;
-mod cache;
-mod chunk;
-mod chunk_state;
-mod file;
-mod index_patch;
-mod rejoin;
+mod chunking;
+mod publish;
+mod read;
 mod schema;
-mod validate;
-mod view;
 
 pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
-pub use cache::SegmentCache;
-pub use chunk::{
-    MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, PointChunkSource,
-    TREE_CHUNK_MIN_POINTS, TreeChunkSource, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id,
-    chunk_segment_layer, is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
+pub use chunking::{
+    MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN,
+    TREE_CHUNK_MIN_POINTS, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer,
+    is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
 };
-pub use chunk_state::{ChunkShape, PublishedLayer};
-pub use file::{FILE_MAGIC, SnapshotFile};
-pub use rejoin::{CheckedManifest, KnownParts};
+pub use publish::{ChunkShape, PointChunkSource, PublishedLayer, SegmentCache, TreeChunkSource};
+pub use read::{
+    ArchivedNodeRef, ArchivedScene, CheckedManifest, FILE_MAGIC, KnownParts, SnapshotFile,
+    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
+    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
+};
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
     ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, ArchivedTreeChunk,
     ArchivedTreeChunkRef, FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer,
     NodeIndexSegment, PointChunk, PointChunkRef, TreeChunk, TreeChunkRef,
 };
-pub use validate::{
-    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
-    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
-};
-pub use view::{ArchivedNodeRef, ArchivedScene};

@@ -239,3 +239,26 @@ pub(crate) fn u32s(v: &ArchivedVec<rkyv::rend::u32_le>) -> &[u32] {
 pub(crate) fn u64s(v: &ArchivedVec<rkyv::rend::u64_le>) -> &[u64] {
     bytemuck::cast_slice(v.as_slice())
 }
+
+/// Offsets in an archived manifest's bytes (starting at `base`) of its per-cut fields:
+/// the cut's generation, and per layer (in manifest order) its generation, node count
+/// and smallest and largest node id.
+pub(crate) fn cut_field_offsets(
+    manifest: &ArchivedManifest,
+    base: usize,
+) -> (usize, Vec<[usize; 4]>) {
+    let at = |field: &rkyv::rend::u64_le| std::ptr::from_ref(field).addr() - base;
+    let layers = manifest
+        .layers
+        .iter()
+        .map(|l| {
+            [
+                at(&l.generation),
+                at(&l.node_count),
+                at(&l.min_id),
+                at(&l.max_id),
+            ]
+        })
+        .collect();
+    (at(&manifest.generation), layers)
+}

@@ -4,7 +4,7 @@
 //!
 //! Between two structure changes a publishing writer changes only fixed-size fields of
 //! its manifest: the cut's generation and each layer's generation, node count and id
-//! bounds ([`cut_field_offsets`]; the writer patches them in place). Every bit pattern of
+//! bounds (`cut_field_offsets` in the schema; the writer patches them in place). Every bit pattern of
 //! those `u64` fields is valid, so a manifest equal to a checked one everywhere else is as
 //! valid as it, and its layer DAG, layer names and term lists are the ones checked.
 
@@ -13,31 +13,8 @@
     reason = "re-deriving a manifest from bytes equal to validated ones but for integers"
 )]
 
-use super::schema::ArchivedManifest;
 use crate::bytes::ARCHIVE_ALIGN;
-
-/// Offsets in an archived manifest's bytes (starting at `base`) of its per-cut fields:
-/// the cut's generation, and per layer (in manifest order) its generation, node count
-/// and smallest and largest node id.
-pub(crate) fn cut_field_offsets(
-    manifest: &ArchivedManifest,
-    base: usize,
-) -> (usize, Vec<[usize; 4]>) {
-    let at = |field: &rkyv::rend::u64_le| std::ptr::from_ref(field).addr() - base;
-    let layers = manifest
-        .layers
-        .iter()
-        .map(|l| {
-            [
-                at(&l.generation),
-                at(&l.node_count),
-                at(&l.min_id),
-                at(&l.max_id),
-            ]
-        })
-        .collect();
-    (at(&manifest.generation), layers)
-}
+use crate::snapshot::schema::{ArchivedManifest, cut_field_offsets};
 
 /// A manifest that passed [`super::validate_manifest`] and the structure checks of a
 /// join, kept (a private copy) so that the next cut's manifest is compared with it

@@ -7,14 +7,15 @@
     reason = "re-deriving references to bytes validated before"
 )]
 
-use super::chunk::{MAX_POINT_CHUNK_LEN, check_chunk_refs, check_tree_chunk, chunk_error};
-use super::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, FORMAT_VERSION,
-    NO_PARENT, u32s, u64s,
-};
+use super::chunk_check::{check_chunk_refs, check_tree_chunk, chunk_error};
 use crate::SnapshotError;
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::check_tree;
+use crate::snapshot::chunking::MAX_POINT_CHUNK_LEN;
+use crate::snapshot::schema::{
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, FORMAT_VERSION,
+    NO_PARENT, u32s, u64s,
+};
 
 fn validation(what: &str, e: impl std::fmt::Display) -> SnapshotError {
     SnapshotError::Validation {

@@ -2,14 +2,14 @@
 //! [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
 //! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
 
-use super::chunk::{PointChunkSource, TreeChunkSource};
-use super::schema::{
-    FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
-    NodeIndexSegment, PointChunk, TreeChunk,
-};
+use super::chunk_source::{PointChunkSource, TreeChunkSource};
 use crate::bytes::{SegmentBytes, archive};
 use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, StoredValue};
 use crate::index::{ArchivedKdTree, build_tree};
+use crate::snapshot::schema::{
+    FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
+    NodeIndexSegment, PointChunk, TreeChunk,
+};
 use crate::{LayerId, Node, NodeId, Point, SceneGraph, SnapshotError};
 use rkyv::Serialize;
 

@@ -4,12 +4,13 @@
 //! changed, and a tree (the layer index's base tree, a node index's tree) only when it
 //! was built anew; and [`PublishedLayer`], a layer as it is published.
 
-use super::chunk::{
-    PointChunkSource, TreeChunkSource, WITHHELD_TREE_MAX_MEMBERS, chunk_count, chunk_range,
-    chunk_segment_id, has_tree_chunk, is_chunked, tree_chunk_segment_id, withholds_node_tree,
-};
-use super::schema::{LayerSegment, NodeIndexSegment, PointChunkRef, TreeChunkRef};
+use super::chunk_source::{PointChunkSource, TreeChunkSource};
 use crate::index::{KdTree, build_tree};
+use crate::snapshot::chunking::{
+    WITHHELD_TREE_MAX_MEMBERS, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
+    is_chunked, tree_chunk_segment_id, withholds_node_tree,
+};
+use crate::snapshot::schema::{LayerSegment, NodeIndexSegment, PointChunkRef, TreeChunkRef};
 use crate::{LayerId, NodeId, Point, SceneGraph};
 use std::ops::Range;
 

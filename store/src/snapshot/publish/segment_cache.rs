@@ -24,14 +24,15 @@
 //! mutations.
 
 use super::archive::StringTable;
-use super::chunk::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use super::chunk_state::{ChunkState, PublishedLayer};
-use super::index_patch::{PointChanges, update_layer_index};
-use super::rejoin::cut_field_offsets;
-use super::schema::{ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT};
+use super::layer_index_update::{PointChanges, update_layer_index};
 use crate::bytes::{SegmentBytes, archive};
 use crate::graph::Layer;
 use crate::graph::LayerChanges;
+use crate::snapshot::chunking::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
+use crate::snapshot::schema::{
+    ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT, cut_field_offsets,
+};
 use crate::{LayerId, NodeId, SceneGraph};
 use rustc_hash::FxHashMap;
 use std::ops::Range;

@@ -6,10 +6,10 @@
     reason = "memory-mapping a file and re-deriving references to bytes validated at open"
 )]
 
-use super::schema::{ArchivedLayerSegment, ArchivedManifest, FORMAT_VERSION};
+use super::cut::ArchivedScene;
 use super::validate::{validate_layer, validate_manifest};
-use super::view::ArchivedScene;
 use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes};
+use crate::snapshot::schema::{ArchivedLayerSegment, ArchivedManifest, FORMAT_VERSION};
 use crate::{SceneGraph, SnapshotError};
 use std::path::Path;
 

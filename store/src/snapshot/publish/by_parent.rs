@@ -2,7 +2,7 @@
 //! afresh for a full build, re-filed row by row for a patched one (appending a pose
 //! nested under a place files one row).
 
-use super::schema::{LayerSegment, NO_PARENT};
+use crate::snapshot::schema::{LayerSegment, NO_PARENT};
 
 /// Past this many rows whose parent changed, a patched build sorts the column afresh.
 const MAX_REFILED: usize = 64;

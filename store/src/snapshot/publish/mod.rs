@@ -1,0 +1,13 @@
+//! What only a publishing writer runs: archiving its live graph into segments, and
+//! [`SegmentCache`], which re-archives only what changed since the last publish.
+
+mod archive;
+mod by_parent;
+mod chunk_source;
+mod chunk_state;
+mod layer_index_update;
+mod segment_cache;
+
+pub use chunk_source::{PointChunkSource, TreeChunkSource};
+pub use chunk_state::{ChunkShape, PublishedLayer};
+pub use segment_cache::SegmentCache;
