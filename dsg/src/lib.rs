@@ -63,7 +63,6 @@ compile_error!("ygg-dsg builds scenes for ygg-store, which supports little-endia
 mod binary;
 mod diag;
 mod error;
-mod export;
 mod io;
 mod json;
 mod model;
@@ -85,9 +84,9 @@ pub use self::binary::{
 #[doc(inline)]
 pub use self::error::DsgImportError;
 #[doc(inline)]
-pub use self::export::{DsgExportError, to_json_bytes, write_json, write_json_to};
-#[doc(inline)]
 pub use self::io::{import_file, read_file, read_file_with, read_file_with_progress};
+#[doc(inline)]
+pub use self::json::{DsgExportError, to_json_bytes, write_json, write_json_to};
 #[doc(inline)]
 pub use self::json::{parse_json, parse_json_with, parse_json_with_progress};
 #[doc(inline)]

@@ -10,7 +10,7 @@ use super::attributes::{self, EDGE_ATTRIBUTES, NodeLayout, NodeOut};
 use super::graph::IDENTIFIER;
 use super::mesh;
 use super::writer::Writer;
-use crate::export::{DsgExportError, box_axis, layer_keys, layer_names, name_to_write};
+use crate::json::{DsgExportError, box_axis, layer_keys, layer_names, name_to_write};
 use crate::model::{DsgEdge, DsgGraph, NodeKind};
 
 /// Writes `graph` as a spark_dsg 1.1.3 binary file (`.sparkdsg`: header, then the

@@ -1,6 +1,6 @@
 //! The file header and the graph body (`graph_binary_serialization.cpp`,
 //! `versioning.cpp`), decoded into the JSON importer's raw form so that both formats
-//! go through one set of checks ([`crate::json::build_graph`]).
+//! go through one set of checks (`crate::json::build_graph`).
 //!
 //! Body, in order, with the reader's version branches:
 //! - layer keys `ARR32(n)` of `[ARR32(2), INT64 layer, UINT32 partition]` (from 1.1.2;

@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::OfficeParams;
+use super::params::OfficeParams;
 
 /// The generator: parameters and one random stream, drawn in a fixed order.
 pub(super) struct Gen {

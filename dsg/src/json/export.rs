@@ -1,6 +1,6 @@
-//! Spark-DSG JSON export: the inverse of [`parse_json`](super::parse_json).
+//! Spark-DSG JSON export: the inverse of [`parse_json`](crate::parse_json).
 //!
-//! See [`write_json`](super::write_json) for the layout and what reads back.
+//! See [`write_json`](crate::write_json) for the layout and what reads back.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -9,7 +9,7 @@ use std::path::Path;
 
 use serde_json::ser::{CompactFormatter, Formatter};
 
-use super::model::{DsgAabb, DsgEdge, DsgGraph, DsgMesh, DsgNode, LayerKey, NodeKind};
+use crate::model::{DsgAabb, DsgEdge, DsgGraph, DsgMesh, DsgNode, LayerKey, NodeKind};
 
 /// Why a graph could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -65,7 +65,7 @@ pub enum DsgExportError {
 ///   `last_update_time_ns` is 0 (the timestamp for agent poses), orientations are
 ///   the identity, place distances are 0, and the mesh has no colors or stamps.
 ///
-/// Importing the output with [`parse_json`](super::parse_json) gives back an equal
+/// Importing the output with [`parse_json`](crate::parse_json) gives back an equal
 /// graph, except for [`DsgGraph::source`], a legacy [`DsgGraph::version`] (always
 /// written as 1.1.3), the one-ulp cases above, and these corner cases of hand-built
 /// graphs:

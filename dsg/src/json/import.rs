@@ -4,16 +4,16 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use rustc_hash::{FxHashMap, FxHashSet};
 
-use super::diag;
-use super::error::DsgImportError;
-use super::model::{
+use crate::diag;
+use crate::error::DsgImportError;
+use crate::model::{
     DsgAabb, DsgEdge, DsgGraph, DsgLayer, DsgMesh, DsgNode, DsgParentEdge, DsgVersion, LayerKey,
     NodeKind,
 };
-use super::progress::{ImportPhase, ImportProgress};
-use super::raw::{Num, RawBox, RawFile, RawMesh, RawNode};
-use super::report::{DropClass, ImportOptions, ImportReport, Imported};
-use super::symbol::{NodeSymbol, describe_id, looks_like_symbol};
+use crate::progress::{ImportPhase, ImportProgress};
+use crate::raw::{Num, RawBox, RawFile, RawMesh, RawNode};
+use crate::report::{DropClass, ImportOptions, ImportReport, Imported};
+use crate::symbol::{NodeSymbol, describe_id, looks_like_symbol};
 
 /// Parses a Spark-DSG JSON document (v1.1.x or legacy v1.0) into a [`DsgGraph`].
 ///
@@ -607,7 +607,7 @@ impl<'p> Builder<'p> {
         &self,
         declared: &Declared,
         used: &BTreeSet<LayerKey>,
-        names: Option<&BTreeMap<String, super::raw::RawLayerRef>>,
+        names: Option<&BTreeMap<String, crate::raw::RawLayerRef>>,
         legacy: bool,
     ) -> Vec<DsgLayer> {
         let mut keys: BTreeSet<LayerKey> = used.clone();
