@@ -197,7 +197,7 @@ impl SceneReaderBuilder {
     }
 
     /// The iceoryx2 file-name prefix; overrides
-    /// [`ygg_transport::protocol::ENV_IOX2_PREFIX`]. Must match the writer's.
+    /// [`ygg_transport::service::ENV_IOX2_PREFIX`]. Must match the writer's.
     pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
         self.subscriber = self.subscriber.iceoryx_prefix(prefix);
         self

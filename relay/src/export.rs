@@ -39,7 +39,7 @@ const POLL: Duration = Duration::from_millis(100);
 /// # Errors
 /// Bad arguments, a Zenoh session that cannot open, or a local reader that cannot be set up.
 pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
-    ygg_transport::protocol::SceneServices::new(&args.scene)
+    ygg_transport::service::SceneServices::new(&args.scene)
         .map_err(|e| format!("--scene {:?}: {e}", args.scene))?;
     let keys = SceneKeys::new(&args.key).map_err(|e| format!("--key: {e}"))?;
     let session = args.network.open()?;

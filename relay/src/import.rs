@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use ygg_store::snapshot::SegmentBytes;
-use ygg_transport::protocol::{DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS};
+use ygg_transport::service::{DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS};
 use ygg_transport::{PublisherBuilder, SegmentPublisher};
 use zenoh::Wait as _;
 use zenoh::bytes::ZBytes;
@@ -64,7 +64,7 @@ enum Event {
 /// Bad arguments, a Zenoh session that cannot open, or a local scene that cannot be
 /// published (for example one another writer on this host publishes).
 pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
-    ygg_transport::protocol::SceneServices::new(&args.scene)
+    ygg_transport::service::SceneServices::new(&args.scene)
         .map_err(|e| format!("--scene {:?}: {e}", args.scene))?;
     let keys = SceneKeys::new(&args.key).map_err(|e| format!("--key: {e}"))?;
     let session = args.network.open()?;

@@ -1,6 +1,6 @@
 //! [`TestScene`]: a unique scene name and iceoryx2 prefix per test or run, and the scan
 //! of `/dev/shm` (iceoryx2's shared memory and, below
-//! [`ygg_transport::protocol::ICEORYX2_ROOT`], its node and service files) for the files of a
+//! [`ygg_transport::service::ICEORYX2_ROOT`], its node and service files) for the files of a
 //! prefix.
 
 use std::path::{Path, PathBuf};
@@ -8,7 +8,7 @@ use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use ygg_transport::protocol::ENV_IOX2_PREFIX;
+use ygg_transport::service::ENV_IOX2_PREFIX;
 
 use crate::{Proc, Watchdog, binary};
 
@@ -74,7 +74,7 @@ impl TestScene {
     }
 
     /// Every file of this scene's prefix below `/dev/shm` (iceoryx2's node and service
-    /// files included: [`ygg_transport::protocol::ICEORYX2_ROOT`]).
+    /// files included: [`ygg_transport::service::ICEORYX2_ROOT`]).
     pub fn files(&self) -> Vec<PathBuf> {
         let mut found = Vec::new();
         collect(

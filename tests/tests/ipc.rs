@@ -12,9 +12,10 @@ use iceoryx2::prelude::{NodeBuilder, ServiceName};
 use rustix::process::Signal;
 use ygg_testkit::{TestScene, Watchdog, field};
 use ygg_transport::protocol::{
-    self, BLOCK_SIZE, Block128, EVENT_SNAPSHOT_PUBLISHED, Ipc, MANIFEST_LAYER_ID, MANIFEST_MAGIC,
+    self, BLOCK_SIZE, Block128, EVENT_SNAPSHOT_PUBLISHED, MANIFEST_LAYER_ID, MANIFEST_MAGIC,
     ManifestEntry, SegmentError, SegmentHeader, SegmentKind,
 };
+use ygg_transport::service::{self, Ipc};
 use ygg_transport::{
     PublishError, PublisherBuilder, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder,
     WriterStatus, test_pattern,
@@ -459,7 +460,7 @@ fn sigint_and_sigterm_exit_cleanly_and_remove_shared_memory() {
 fn shared_memory_full_is_an_error_before_anything_is_written() {
     let scene = TestScene::new("full");
     let mut writer = publisher(&scene).create().expect("writer");
-    let free = ygg_transport::shm::free_bytes(std::path::Path::new(protocol::DEFAULT_SHM_DIR))
+    let free = ygg_transport::shm::free_bytes(std::path::Path::new(service::DEFAULT_SHM_DIR))
         .expect("statvfs");
     let too_big = usize::try_from(free).expect("64-bit") + (1 << 30);
     let mut called = false;
@@ -568,8 +569,8 @@ impl FakeWriter {
     const LAYER: u32 = 7;
 
     fn new(scene: &TestScene) -> Self {
-        let names = protocol::SceneServices::new(&scene.name).expect("scene name");
-        let config = protocol::iceoryx_config(Some(&scene.prefix)).expect("config");
+        let names = service::SceneServices::new(&scene.name).expect("scene name");
+        let config = service::iceoryx_config(Some(&scene.prefix)).expect("config");
         let node = NodeBuilder::new()
             .config(&config)
             .create::<Ipc>()
@@ -588,7 +589,7 @@ impl FakeWriter {
         let event = |name: &str| {
             node.service_builder(&ServiceName::new(name).expect("name"))
                 .event()
-                .event_id_max_value(protocol::EVENT_ID_MAX)
+                .event_id_max_value(service::EVENT_ID_MAX)
                 .open_or_create()
                 .expect("event service")
         };

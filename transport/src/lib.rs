@@ -7,8 +7,9 @@
 //! * See [`SegmentSubscriber`] (from [`SubscriberBuilder`]) for the reader side:
 //!   [`SegmentSubscriber::wait_next`] / [`SegmentSubscriber::latest`] hand out [`Snapshot`]s,
 //!   zero-copy.
-//! * [`protocol`] is the wire format both sides share: service names, the segment header, the
-//!   manifest prefix, events and quality of service.
+//! * [`protocol`] is the wire format both sides share: the segment header, payload blocks,
+//!   the manifest prefix and event ids. [`service`] names a scene's services and holds
+//!   their iceoryx2 configuration and quality of service.
 //!
 //! The transport knows bytes, not graphs: segment payloads are opaque here (a segment id is a
 //! layer or a chunk of one, the transport does not care), and validating the archives inside
@@ -21,7 +22,7 @@
 //!
 //! # Design: one stream per scene
 //!
-//! Three iceoryx2 services per scene ([`protocol`]): the segment stream (publish-subscribe),
+//! Three iceoryx2 services per scene ([`service::SceneServices`]): the segment stream (publish-subscribe),
 //! an event service to wake readers and one for readers to ask for a catch-up. Every segment
 //! and every manifest goes over the one stream, in publish order: a cut's changed segments,
 //! then the manifest naming the generation of every segment of the snapshot. A reader files
@@ -62,7 +63,7 @@
 //!   thread waits for the helper for at most one segment's copy. A reader that overflows all
 //!   the time makes the writer copy the scene ten times a second at most.
 //! * A snapshot names at most `max_segments` segments ([`PublisherBuilder::max_segments`],
-//!   default [`protocol::DEFAULT_MAX_SEGMENTS`]).
+//!   default [`service::DEFAULT_MAX_SEGMENTS`]).
 #![warn(missing_docs)]
 
 pub mod limits;
@@ -70,7 +71,7 @@ mod process_watch;
 pub mod protocol;
 mod publisher;
 pub use publisher::shm;
-mod service;
+pub mod service;
 pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
 pub mod test_pattern;

@@ -26,7 +26,7 @@ use iceoryx2::prelude::{Node, NodeState, SemanticString as _};
 use rustix::event::{PollFd, PollFlags, Timespec, poll};
 use rustix::process::{Pid, PidfdFlags, pidfd_open};
 
-use crate::protocol::Ipc;
+use crate::service::Ipc;
 
 /// How long a pidfd's answer stands before iceoryx2's check confirms the node again.
 const CONFIRM_INTERVAL: Duration = Duration::from_secs(5);

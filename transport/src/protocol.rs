@@ -1,8 +1,9 @@
 //! The shared-memory wire protocol between one writer and its readers.
 //!
-//! Everything both sides must agree on lives here: service names, the payload block type, the
-//! user header, the transport-level manifest prefix, event ids and the quality-of-service
-//! constants. The writer crate depends on this module; nothing here depends on the store.
+//! The wire format: the bytes both sides must agree on: the payload block type, the user
+//! header, the transport-level manifest prefix and the event ids. The services' names,
+//! their iceoryx2 configuration and quality of service are in [`crate::service`]. Nothing
+//! here depends on the store.
 //!
 //! # Services of one scene
 //!
@@ -32,23 +33,8 @@
 //!   that belongs to it. Layer segments are published before the manifest that names them.
 
 use core::fmt;
-use core::time::Duration;
 
-use iceoryx2::config::Config;
-use iceoryx2::prelude::{EventId, FileName, Path, SemanticString, ZeroCopySend};
-
-/// The iceoryx2 service flavour used by writer and reader.
-///
-/// The thread-safe variant has the same shared-memory layout as `ipc::Service`; it makes ports
-/// and samples `Send`, so a writer can answer readers from a helper thread and a reader's
-/// snapshots can move between threads.
-pub type Ipc = iceoryx2::service::ipc_threadsafe::Service;
-
-/// First path component of every Yggdrasil service name.
-pub const SERVICE_ROOT: &str = "ygg";
-
-/// Longest accepted scene name, in bytes.
-pub const MAX_SCENE_NAME_LEN: usize = 64;
+use iceoryx2::prelude::{EventId, ZeroCopySend};
 
 /// Alignment, in bytes, of the first payload byte of every segment.
 pub const SEGMENT_ALIGN: usize = 128;
@@ -76,52 +62,8 @@ pub const MANIFEST_FIXED_LEN: usize = 16;
 /// Size of one encoded [`ManifestEntry`].
 pub const MANIFEST_ENTRY_LEN: usize = 16;
 
-/// Default for the most segments one snapshot may name (layers, or chunks of layers): sizes
-/// the segment stream's pool (see [`stream_buffer_size`], [`stream_max_borrowed`]).
-pub const DEFAULT_MAX_SEGMENTS: usize = 512;
-
-/// Samples a reader's subscription to the segment stream buffers between two receives: one
-/// whole snapshot and its manifest, so that neither a catch-up burst nor a cut that changes
-/// every segment overflows a reader that keeps up. A reader that falls further behind loses
-/// its oldest buffered samples (safe overflow), notices the hole and asks for a catch-up.
-pub const fn stream_buffer_size(max_segments: usize) -> usize {
-    max_segments + 2
-}
-
-/// Samples one subscriber may hold from the segment stream when snapshots name at most
-/// `max_segments` segments: the current snapshot's, newer ones waiting for their manifest
-/// (or a burst being received), and a few manifests and samples of older snapshots the
-/// application still holds. Costs address space and a byte per sample and possible
-/// reallocation in each connection: iceoryx2 reuses freed chunks last-in first-out, and the
-/// writer gives back the pages a reused chunk no longer needs once the pool holds more than
-/// about four snapshots (`publisher::loan`), so unused chunks cost address space, not memory.
-pub const fn stream_max_borrowed(max_segments: usize) -> usize {
-    2 * max_segments + 16
-}
-
-/// Segments per snapshot a stream created with this subscriber buffer size and borrow limit
-/// supports: the inverse of [`stream_buffer_size`] and [`stream_max_borrowed`].
-pub const fn stream_segments_supported(buffer_size: usize, max_borrowed: usize) -> usize {
-    let by_buffer = buffer_size.saturating_sub(2);
-    let by_borrowed = max_borrowed.saturating_sub(16) / 2;
-    if by_buffer < by_borrowed {
-        by_buffer
-    } else {
-        by_borrowed
-    }
-}
-
 /// [`SegmentHeader::flags`] bit: the segment is a catch-up copy of the current snapshot.
 pub const FLAG_CATCH_UP: u32 = 1;
-
-/// Samples the writer may hold on loan per service (it fills one at a time).
-pub const PUBLISHER_MAX_LOANED: usize = 1;
-
-/// Default number of readers a scene supports at once.
-pub const DEFAULT_MAX_READERS: usize = 8;
-
-/// Highest event id used on the event services.
-pub const EVENT_ID_MAX: usize = 7;
 
 /// Writer -> readers: a new manifest was published (or a catch-up burst was sent).
 pub const EVENT_SNAPSHOT_PUBLISHED: EventId = EventId::new(1);
@@ -135,26 +77,6 @@ pub const EVENT_READER_HELLO: EventId = EventId::new(3);
 
 /// Writer-internal: wakes the writer's helper thread so it can stop.
 pub const EVENT_WRITER_STOP: EventId = EventId::new(4);
-
-/// Environment variable that overrides the iceoryx2 file-name prefix (default `iox2_`).
-///
-/// Every shared-memory object and node file the transport creates starts with this prefix, so a
-/// distinct prefix isolates a group of processes (the integration tests use one per test).
-/// Writer and readers of one scene must use the same prefix.
-pub const ENV_IOX2_PREFIX: &str = "YGG_IOX2_PREFIX";
-
-/// Default path of the POSIX shared-memory file system that iceoryx2 allocates from.
-pub const DEFAULT_SHM_DIR: &str = "/dev/shm";
-
-/// Where iceoryx2 keeps its node and service files for Yggdrasil (its own default is
-/// `/tmp/iceoryx2/`): on the shared-memory tmpfs, because iceoryx2 fsyncs every node and
-/// port file it writes, 7 fsyncs per attaching reader that cost 5-8 ms of a ~20 ms attach on
-/// a disk-backed `/tmp`. Every Yggdrasil process uses it ([`iceoryx_config`]); iceoryx2's
-/// own tools see these scenes when their config names the same root.
-pub const ICEORYX2_ROOT: &str = "/dev/shm/iceoryx2/";
-
-/// How often helper threads and waiting readers check peers for liveness.
-pub const DEFAULT_LIVENESS_INTERVAL: Duration = Duration::from_millis(200);
 
 /// One 128-byte, 128-aligned block of segment payload.
 ///
@@ -527,108 +449,6 @@ pub fn decode_manifest_prefix(bytes: &[u8]) -> Result<(Vec<ManifestEntry>, usize
     Ok((entries, prefix_len))
 }
 
-/// A scene name that cannot name iceoryx2 services.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum SceneNameError {
-    /// The name is empty.
-    #[error("the scene name is empty")]
-    Empty,
-    /// The name is longer than [`MAX_SCENE_NAME_LEN`].
-    #[error("the scene name is {len} bytes long, at most {MAX_SCENE_NAME_LEN} are allowed")]
-    TooLong {
-        /// Its length.
-        len: usize,
-    },
-    /// The name contains a character other than ASCII letters, digits, `-`, `_` and `.`.
-    #[error("the scene name contains {found:?}; use ASCII letters, digits, '-', '_' or '.'")]
-    InvalidCharacter {
-        /// The first offending character.
-        found: char,
-    },
-}
-
-/// The names of the services of one scene.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SceneServices {
-    scene: String,
-}
-
-impl SceneServices {
-    /// Validates `scene` and returns its service names.
-    ///
-    /// # Errors
-    ///
-    /// [`SceneNameError`] if the name is empty, too long or has characters outside
-    /// `[A-Za-z0-9._-]`.
-    pub fn new(scene: &str) -> Result<Self, SceneNameError> {
-        if scene.is_empty() {
-            return Err(SceneNameError::Empty);
-        }
-        if scene.len() > MAX_SCENE_NAME_LEN {
-            return Err(SceneNameError::TooLong { len: scene.len() });
-        }
-        if let Some(found) = scene
-            .chars()
-            .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.')))
-        {
-            return Err(SceneNameError::InvalidCharacter { found });
-        }
-        Ok(Self {
-            scene: scene.to_owned(),
-        })
-    }
-
-    /// The scene name.
-    pub fn scene(&self) -> &str {
-        &self.scene
-    }
-
-    /// `ygg/<scene>/segments`: every segment, in publish order, and catch-up bursts.
-    pub fn segments(&self) -> String {
-        format!("{SERVICE_ROOT}/{}/segments", self.scene)
-    }
-
-    /// `ygg/<scene>/events` (writer -> readers).
-    pub fn events(&self) -> String {
-        format!("{SERVICE_ROOT}/{}/events", self.scene)
-    }
-
-    /// `ygg/<scene>/readers` (readers -> writer).
-    pub fn readers(&self) -> String {
-        format!("{SERVICE_ROOT}/{}/readers", self.scene)
-    }
-}
-
-/// An iceoryx2 file-name prefix that iceoryx2 does not accept.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("invalid iceoryx2 prefix {prefix:?} (from {ENV_IOX2_PREFIX} or the builder): {reason}")]
-pub struct PrefixError {
-    /// The rejected prefix.
-    pub prefix: String,
-    /// Why iceoryx2 rejected it.
-    pub reason: String,
-}
-
-/// The iceoryx2 configuration used by writer and readers: iceoryx2's global configuration,
-/// with the file-name prefix replaced by `prefix` if given, else by [`ENV_IOX2_PREFIX`] if set.
-///
-/// # Errors
-///
-/// [`PrefixError`] if the prefix is not a valid file name.
-pub fn iceoryx_config(prefix: Option<&str>) -> Result<Config, PrefixError> {
-    let mut config = Config::global_config().clone();
-    let root = Path::new(ICEORYX2_ROOT.as_bytes()).expect("ICEORYX2_ROOT is a valid path");
-    config.global.set_root_path(&root);
-    let from_env = std::env::var(ENV_IOX2_PREFIX).ok();
-    if let Some(prefix) = prefix.or(from_env.as_deref()) {
-        config.global.prefix = FileName::new(prefix.as_bytes()).map_err(|e| PrefixError {
-            prefix: prefix.to_owned(),
-            reason: format!("{e:?}"),
-        })?;
-    }
-    Ok(config)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -652,22 +472,6 @@ mod tests {
         let (decoded, offset) = decode_manifest_prefix(&buf).expect("valid prefix");
         assert_eq!(decoded, entries);
         assert_eq!(offset, len);
-    }
-
-    #[test]
-    fn a_stream_supports_the_segments_it_was_sized_for() {
-        for n in [1, 8, 42, 128, 512, MAX_LAYERS] {
-            assert_eq!(
-                stream_segments_supported(stream_buffer_size(n), stream_max_borrowed(n)),
-                n
-            );
-        }
-        // The smaller of the two limits wins.
-        assert_eq!(
-            stream_segments_supported(stream_buffer_size(64), stream_max_borrowed(8)),
-            8
-        );
-        assert_eq!(stream_segments_supported(0, 0), 0);
     }
 
     #[test]
@@ -739,17 +543,5 @@ mod tests {
             check_stream_header(&bad, 128),
             Err(SegmentError::LayerIdMismatch { .. })
         ));
-    }
-
-    #[test]
-    fn scene_names_are_checked() {
-        assert!(SceneServices::new("office-1.a_b").is_ok());
-        assert_eq!(SceneServices::new(""), Err(SceneNameError::Empty));
-        assert!(matches!(
-            SceneServices::new("a/b"),
-            Err(SceneNameError::InvalidCharacter { found: '/' })
-        ));
-        let s = SceneServices::new("s").expect("valid");
-        assert_eq!(s.segments(), "ygg/s/segments");
     }
 }

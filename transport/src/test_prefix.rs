@@ -2,7 +2,7 @@
 //! `/dev/shm` (iceoryx2's per-prefix `global_mgmt` counter stays after every node is
 //! gone) are removed when it is dropped.
 
-use crate::protocol::{Ipc, iceoryx_config};
+use crate::service::{Ipc, iceoryx_config};
 use iceoryx2::prelude::*;
 
 /// A unit test's iceoryx2 prefix: `ygg_<tag>_<pid>_`.

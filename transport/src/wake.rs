@@ -23,7 +23,7 @@ use iceoryx2_bb_posix::file_descriptor::FileDescriptorBased as _;
 use rustix::event::{PollFd, PollFlags, Timespec, poll};
 use rustix::io::Errno;
 
-use crate::protocol::Ipc;
+use crate::service::Ipc;
 
 /// Waiting failed: the poll or iceoryx2's collection of the events.
 #[derive(Debug, thiserror::Error)]

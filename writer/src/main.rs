@@ -89,7 +89,7 @@ struct Serve {
     #[command(flatten)]
     keep: window::Keep,
     /// Readers the scene supports at once.
-    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
+    #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_READERS)]
     max_readers: usize,
     /// Most layers the scene may grow to (default: a quarter more than the served graph's,
     /// at least 64 more);
@@ -124,7 +124,7 @@ struct ServeTest {
     #[arg(long)]
     linger: bool,
     /// Readers the scene supports at once.
-    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
+    #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_READERS)]
     max_readers: usize,
     /// Print only errors and the final line.
     #[arg(long)]

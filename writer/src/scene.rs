@@ -86,7 +86,7 @@ pub fn default_max_layers(layers: usize) -> usize {
 
 impl SceneWriterBuilder {
     /// Most readers attached at once (default
-    /// [`ygg_transport::protocol::DEFAULT_MAX_READERS`]). Each costs shared memory for the
+    /// [`ygg_transport::service::DEFAULT_MAX_READERS`]). Each costs shared memory for the
     /// samples it may hold.
     pub fn max_readers(mut self, value: usize) -> Self {
         self.publisher = self.publisher.max_readers(value);
@@ -131,7 +131,7 @@ impl SceneWriterBuilder {
     }
 
     /// The iceoryx2 file-name prefix; overrides
-    /// [`ygg_transport::protocol::ENV_IOX2_PREFIX`]. Readers must use the same one.
+    /// [`ygg_transport::service::ENV_IOX2_PREFIX`]. Readers must use the same one.
     pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
         self.publisher = self.publisher.iceoryx_prefix(prefix);
         self
@@ -167,7 +167,7 @@ impl SceneWriterBuilder {
 
 impl SceneWriter {
     /// A builder for the writer of `scene` (ASCII letters, digits, `-`, `_`, `.`; at most
-    /// [`ygg_transport::protocol::MAX_SCENE_NAME_LEN`] bytes), with default settings.
+    /// [`ygg_transport::service::MAX_SCENE_NAME_LEN`] bytes), with default settings.
     pub fn builder(scene: &str) -> SceneWriterBuilder {
         SceneWriterBuilder {
             publisher: PublisherBuilder::new(scene),

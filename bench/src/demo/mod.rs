@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use ygg_testkit::{Input, Proc, TestScene};
-use ygg_transport::protocol::ENV_IOX2_PREFIX;
+use ygg_transport::service::ENV_IOX2_PREFIX;
 
 /// Options of `ygg-bench demo`.
 #[derive(clap::Args, Debug)]

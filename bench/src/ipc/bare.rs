@@ -35,7 +35,7 @@ impl Bare {
         config.global.prefix =
             FileName::new(prefix.as_bytes()).map_err(|e| format!("prefix: {e:?}"))?;
         config.global.set_root_path(
-            &Path::new(ygg_transport::protocol::ICEORYX2_ROOT.as_bytes())
+            &Path::new(ygg_transport::service::ICEORYX2_ROOT.as_bytes())
                 .map_err(|e| format!("root: {e:?}"))?,
         );
         let node = NodeBuilder::new().config(&config).create::<Flavour>()?;

@@ -17,8 +17,9 @@ use iceoryx2::config::Config;
 use iceoryx2::port::listener::Listener;
 
 use super::reader_watch::ReaderWatch;
-use super::segment_publisher::{Inner, lock};
-use crate::protocol::{EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED, Ipc};
+use super::shared_state::{Inner, lock};
+use crate::protocol::{EVENT_READER_HELLO, EVENT_SNAPSHOT_PUBLISHED};
+use crate::service::Ipc;
 use crate::wake;
 
 /// How long the helper sleeps when no reader is connected (a new one announces itself).

@@ -21,7 +21,8 @@
 use core::mem::MaybeUninit;
 use std::collections::HashMap;
 
-use crate::protocol::{BLOCK_SIZE, Block128, Ipc, SegmentHeader};
+use crate::protocol::{BLOCK_SIZE, Block128, SegmentHeader};
+use crate::service::Ipc;
 use iceoryx2::sample_mut::SampleMut;
 use iceoryx2::sample_mut_uninit::SampleMutUninit;
 

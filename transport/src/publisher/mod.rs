@@ -8,6 +8,7 @@ mod ports;
 mod reader_watch;
 mod retained;
 mod segment_publisher;
+mod shared_state;
 pub mod shm;
 
 pub use error::{PublishError, WriterCreateError, WriterWaitError};

@@ -13,10 +13,8 @@ use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 
 use super::{PublishError, WriterCreateError, loan, shm};
-use crate::protocol::{
-    self, BLOCK_SIZE, Block128, EVENT_ID_MAX, EVENT_WRITER_GONE, Ipc, PUBLISHER_MAX_LOANED,
-    SegmentHeader,
-};
+use crate::protocol::{self, BLOCK_SIZE, Block128, EVENT_WRITER_GONE, SegmentHeader};
+use crate::service::{self, EVENT_ID_MAX, Ipc, PUBLISHER_MAX_LOANED};
 
 /// A publish-subscribe service of segments.
 pub(crate) type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
@@ -117,8 +115,8 @@ pub(crate) fn open_segment_port(
             .enable_safe_overflow(true)
     };
     let opened = stream()
-        .subscriber_max_buffer_size(protocol::stream_buffer_size(settings.max_segments))
-        .subscriber_max_borrowed_samples(protocol::stream_max_borrowed(settings.max_segments))
+        .subscriber_max_buffer_size(service::stream_buffer_size(settings.max_segments))
+        .subscriber_max_borrowed_samples(service::stream_max_borrowed(settings.max_segments))
         .open_or_create();
     let service = match opened {
         Err(PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(
@@ -130,7 +128,7 @@ pub(crate) fn open_segment_port(
         opened => opened.map_err(|e| crate::service::service_failure(name, e))?,
     };
     let config = service.static_config();
-    let max_segments = protocol::stream_segments_supported(
+    let max_segments = service::stream_segments_supported(
         config.subscriber_max_buffer_size(),
         config.subscriber_max_borrowed_samples(),
     )

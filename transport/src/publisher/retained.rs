@@ -11,9 +11,8 @@ use std::sync::Arc;
 
 use iceoryx2::port::subscriber::Subscriber;
 
-use crate::protocol::{
-    Block128, FLAG_CATCH_UP, Ipc, MANIFEST_LAYER_ID, ManifestEntry, SegmentHeader,
-};
+use crate::protocol::{Block128, FLAG_CATCH_UP, MANIFEST_LAYER_ID, ManifestEntry, SegmentHeader};
+use crate::service::Ipc;
 use crate::subscriber::HeldSegment;
 
 /// A sample of the segment stream, as the writer's own subscriber holds it.

@@ -3,29 +3,27 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, SystemTime};
 
 use crate::SetupError;
 use crate::protocol::{
-    self, BLOCK_SIZE, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS,
-    EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP, Ipc, MANIFEST_LAYER_ID,
-    ManifestEntry, SceneServices, SegmentHeader, SegmentKind,
+    self, BLOCK_SIZE, EVENT_SNAPSHOT_PUBLISHED, EVENT_WRITER_GONE, EVENT_WRITER_STOP,
+    MANIFEST_LAYER_ID, ManifestEntry, SegmentHeader, SegmentKind,
 };
-use iceoryx2::identifiers::UniqueNodeId;
+use crate::service::{
+    self, DEFAULT_LIVENESS_INTERVAL, DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS, Ipc, SceneServices,
+};
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::notifier::Notifier;
-use iceoryx2::port::update_connections::UpdateConnections;
-use iceoryx2::prelude::{CallbackProgression, EventId, Node};
-use iceoryx2::service::port_factory::PortFactory as _;
+use iceoryx2::prelude::Node;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 
 use super::helper::Helper;
-use super::ports::{
-    PortSettings, SegmentService, open_event_service, open_segment_port, send_segment,
-};
-use super::retained::{Retained, RetainedSample};
+use super::ports::{PortSettings, open_event_service, open_segment_port, send_segment};
+use super::retained::Retained;
+use super::shared_state::{Inner, Stream, lock};
 use super::{PublishError, WriterCreateError, WriterWaitError};
 
 /// Default initial capacity of a segment before iceoryx2 grows it (power-of-two steps).
@@ -61,7 +59,7 @@ impl PublisherBuilder {
             max_readers: DEFAULT_MAX_READERS,
             max_segments: DEFAULT_MAX_SEGMENTS,
             initial_segment_bytes: DEFAULT_INITIAL_SEGMENT_BYTES,
-            shm_dir: PathBuf::from(protocol::DEFAULT_SHM_DIR),
+            shm_dir: PathBuf::from(service::DEFAULT_SHM_DIR),
             iceoryx_prefix: None,
             liveness_interval: DEFAULT_LIVENESS_INTERVAL,
         }
@@ -106,7 +104,7 @@ impl PublisherBuilder {
         self
     }
 
-    /// The iceoryx2 file-name prefix; overrides [`protocol::ENV_IOX2_PREFIX`]. Readers must use
+    /// The iceoryx2 file-name prefix; overrides [`service::ENV_IOX2_PREFIX`]. Readers must use
     /// the same prefix.
     pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
         self.iceoryx_prefix = Some(prefix.to_owned());
@@ -132,7 +130,7 @@ impl PublisherBuilder {
     pub fn create(self) -> Result<SegmentPublisher, WriterCreateError> {
         let services = SceneServices::new(&self.scene).map_err(SetupError::from)?;
         let config =
-            protocol::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
+            service::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
         let node = crate::service::create_node("ygg-writer", services.scene(), &config)?;
         // Removes services and ports of a writer that was killed, so that its publisher slot is
         // free again. (Node creation does this as well under iceoryx2's default config.)
@@ -210,94 +208,6 @@ impl PublisherBuilder {
             _readers: readers,
             node,
         })
-    }
-}
-
-/// The segment stream's publisher and the writer's hold on what it sent.
-struct Stream {
-    port: SegmentService,
-    retained: Retained,
-}
-
-/// State shared with the helper thread.
-pub(crate) struct Inner {
-    /// `None` once the writer is closing.
-    stream: Option<Stream>,
-    events_notifier: Notifier<Ipc>,
-    _events: EventFactory<Ipc>,
-}
-
-impl Inner {
-    /// Connects new subscribers to the segment stream.
-    pub(crate) fn update_connections(&self) {
-        if let Some(stream) = &self.stream {
-            // A failing connection is retried on the next send; nothing to report here.
-            let _ = stream.port.publisher.update_connections();
-        }
-    }
-
-    /// The nodes of the readers connected now (of the stream's subscribers, all but the
-    /// writer's own).
-    pub(crate) fn reader_nodes(&self) -> Vec<UniqueNodeId> {
-        let Some(s) = &self.stream else {
-            return Vec::new();
-        };
-        let config = s.port.service.dynamic_config();
-        let mut writers = Vec::new();
-        config.list_publishers(|p| {
-            writers.push(p.node_id);
-            CallbackProgression::Continue
-        });
-        let mut readers = Vec::new();
-        config.list_subscribers(|sub| {
-            if !writers.contains(&sub.node_id) && !readers.contains(&sub.node_id) {
-                readers.push(sub.node_id);
-            }
-            CallbackProgression::Continue
-        });
-        readers
-    }
-
-    /// Readers connected to the scene now (the stream's subscribers but the writer's own).
-    pub(crate) fn reader_count(&self) -> usize {
-        self.stream.as_ref().map_or(0, |s| {
-            s.port
-                .service
-                .dynamic_config()
-                .number_of_subscribers()
-                .saturating_sub(1)
-        })
-    }
-
-    /// Sends a catch-up copy of `sample` on the stream (and drops the writer's own copy of
-    /// it at once).
-    pub(crate) fn send_copy(
-        &mut self,
-        sample: &RetainedSample,
-        shm_dir: &std::path::Path,
-    ) -> Result<(), PublishError> {
-        let stream = self.stream.as_mut().ok_or(PublishError::Closed)?;
-        let mut header = *sample.header();
-        header.flags |= protocol::FLAG_CATCH_UP;
-        let bytes = sample.bytes();
-        send_segment(&mut stream.port, shm_dir, header, bytes.len(), |buf| {
-            buf.copy_from_slice(bytes);
-            Ok::<_, std::convert::Infallible>(())
-        })?;
-        stream.retained.receive(None);
-        Ok(())
-    }
-
-    /// The samples of the current snapshot, its manifest last (empty before the first).
-    pub(crate) fn current_snapshot(&self) -> Vec<RetainedSample> {
-        self.stream
-            .as_ref()
-            .map_or_else(Vec::new, |s| s.retained.snapshot())
-    }
-
-    pub(crate) fn notify(&self, event: EventId) {
-        // Readers without a listener (or none at all) are no error for the writer.
-        let _ = self.events_notifier.notify_with_custom_event_id(event);
     }
 }
 
@@ -578,12 +488,6 @@ impl Drop for SegmentPublisher {
         inner.stream = None;
         inner.notify(EVENT_WRITER_GONE);
     }
-}
-
-/// The state shared with the helper thread, locked.
-pub(crate) fn lock(inner: &Mutex<Inner>) -> MutexGuard<'_, Inner> {
-    // A panic in the helper thread leaves the ports intact; keep using them.
-    inner.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// A new, practically unique writer session id (time and pid, mixed).

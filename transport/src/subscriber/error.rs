@@ -1,7 +1,8 @@
 //! Errors of the reader: one enum per operation.
 
 use crate::SetupError;
-use crate::protocol::{ENV_IOX2_PREFIX, SegmentError};
+use crate::protocol::SegmentError;
+use crate::service::ENV_IOX2_PREFIX;
 
 /// Why [`SubscriberBuilder::open`](crate::SubscriberBuilder::open) failed.
 #[derive(Debug, thiserror::Error)]

@@ -10,9 +10,10 @@
 use iceoryx2::sample::Sample;
 
 use crate::protocol::{
-    BLOCK_SIZE, Block128, Ipc, SEGMENT_ALIGN, SegmentError, SegmentHeader, SegmentKind,
+    BLOCK_SIZE, Block128, SEGMENT_ALIGN, SegmentError, SegmentHeader, SegmentKind,
     check_stream_header,
 };
+use crate::service::Ipc;
 
 /// A received iceoryx2 sample of segment blocks.
 pub(crate) type SegmentSample = Sample<Ipc, [Block128], SegmentHeader>;

@@ -25,10 +25,8 @@ use super::snapshot::Snapshot;
 use super::{ReaderOpenError, ReceiveError};
 use crate::SetupError;
 use crate::process_watch::{Liveness, ProcessWatch};
-use crate::protocol::{
-    self, Block128, DEFAULT_LIVENESS_INTERVAL, EVENT_READER_HELLO, EVENT_WRITER_GONE, Ipc,
-    SceneServices, SegmentHeader,
-};
+use crate::protocol::{self, Block128, EVENT_READER_HELLO, EVENT_WRITER_GONE, SegmentHeader};
+use crate::service::{self, DEFAULT_LIVENESS_INTERVAL, Ipc, SceneServices};
 use crate::wake;
 
 type SegmentFactory = PubSubFactory<Ipc, [Block128], SegmentHeader>;
@@ -91,7 +89,7 @@ impl SubscriberBuilder {
         self
     }
 
-    /// The iceoryx2 file-name prefix; overrides [`protocol::ENV_IOX2_PREFIX`]. Must match the
+    /// The iceoryx2 file-name prefix; overrides [`service::ENV_IOX2_PREFIX`]. Must match the
     /// writer's.
     pub fn iceoryx_prefix(mut self, prefix: &str) -> Self {
         self.iceoryx_prefix = Some(prefix.to_owned());
@@ -143,7 +141,7 @@ impl SubscriberBuilder {
     fn open_once(&self) -> Result<SegmentSubscriber, ReaderOpenError> {
         let services = SceneServices::new(&self.scene).map_err(SetupError::from)?;
         let config =
-            protocol::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
+            service::iceoryx_config(self.iceoryx_prefix.as_deref()).map_err(SetupError::from)?;
         let node = crate::service::create_node("ygg-reader", services.scene(), &config)?;
         // The first wait installs iceoryx2's signal handler; a zero wait returns at once, with
         // an error when a signal arrived since the last attempt (while waiting for a writer).

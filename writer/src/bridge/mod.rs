@@ -73,11 +73,11 @@ pub struct BridgeArgs {
     #[arg(long, default_value_t = 256 << 10)]
     read_max_bytes: usize,
     /// Readers the scene supports at once.
-    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_READERS)]
+    #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_READERS)]
     max_readers: usize,
     /// Most layers the bridged scene may grow to (a Hydra scene grows room by room and
     /// per-room layouts add layers per room); a lower bound makes readers attach faster.
-    #[arg(long, default_value_t = ygg_transport::protocol::DEFAULT_MAX_SEGMENTS)]
+    #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_SEGMENTS)]
     max_layers: usize,
 }
 
@@ -90,7 +90,7 @@ pub fn run(args: &BridgeArgs) -> Result<(), Box<dyn std::error::Error>> {
         return Err("--seconds must be a positive number".into());
     }
     // Check the scene name before connecting (creating the writer checks it again).
-    ygg_transport::protocol::SceneServices::new(&args.scene)?;
+    ygg_transport::service::SceneServices::new(&args.scene)?;
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;

@@ -27,7 +27,7 @@ fn shm_files(prefix: &str) -> Res<usize> {
 
 /// The layer bound the reference rows use: the fixed bound every writer had before bounds
 /// were sized from the scene.
-const REFERENCE_MAX_LAYERS: usize = ygg_transport::protocol::DEFAULT_MAX_SEGMENTS;
+const REFERENCE_MAX_LAYERS: usize = ygg_transport::service::DEFAULT_MAX_SEGMENTS;
 
 /// One writer's scene and what its attaching readers measured.
 struct Attached {
