@@ -10,6 +10,16 @@
 //!   mutations (a source that resends its whole graph).
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file, and
 //!   [`snapshot::SegmentCache`] for publishing a changing graph incrementally.
+//!
+//! # Where things are
+//! | folder or file | what |
+//! |---|---|
+//! | `graph/` | the live graph: [`SceneGraph`] and every concern of `impl SceneGraph` (mutations, bounding boxes, live indexes, change journal, touch log, sync, invariants, its [`SceneView`]) |
+//! | `view.rs` | [`SceneView`]: twelve required methods, the rest provided |
+//! | `snapshot/` | the archived layout: `schema.rs` and `chunking.rs` shared, `read/` what readers run (validate, join a cut, rejoin, the archived [`SceneView`], `.ygg` files), `publish/` what only a publishing writer runs (archiving, segment cache, chunk state, layer index patches) |
+//! | `index/` | spatial indexes: `live/` (the live kd-tree, its overlay, a graph's indexes), `archived/` (kiddo's trees in a snapshot or built by a reader), the shared nearest walk |
+//! | `query/` | the queries: `pattern`, `spatial`, `fov`, `traverse` |
+//! | `id.rs`, `feature.rs`, `points.rs`, `bytes.rs`, `error.rs` | ids and boxes, feature values, point columns, aligned archive bytes, errors |
 
 #[cfg(not(target_endian = "little"))]
 compile_error!("ygg-store reads archived columns in place and supports little-endian targets only");

@@ -159,7 +159,7 @@ fn visit_tile<const W: usize, V: TileVisitor>(tile: &[u32], visitor: &mut V) {
 }
 
 /// A kd-tree index a reader built from any [`crate::SceneView`] (see
-/// [`super::build_layer_index`]): kiddo's tree, kept archived (the form snapshot indexes
+/// [`crate::index::build_layer_index`]): kiddo's tree, kept archived (the form snapshot indexes
 /// have, so one search serves both), and the node of each item.
 pub struct KdIndex {
     bytes: SegmentBytes,

@@ -69,7 +69,7 @@ impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSourc
     }
 }
 
-/// A layer's kd-tree archived as a [`TreeChunk`](super::TreeChunk) straight from the tree
+/// A layer's kd-tree archived as a [`TreeChunk`](crate::snapshot::TreeChunk) straight from the tree
 /// it holds (no copy of the tree).
 #[derive(Debug, Clone, Copy)]
 pub struct TreeChunkSource<'a> {
@@ -121,7 +121,7 @@ where
 
 impl crate::SceneGraph {
     /// Segments a snapshot of this graph takes when published in point chunks of
-    /// `chunk_len` ([`POINT_CHUNK_LEN`] by default): one per layer, plus the point chunks
+    /// `chunk_len` ([`crate::snapshot::POINT_CHUNK_LEN`] by default): one per layer, plus the point chunks
     /// of each chunked layer and the tree chunks of its large indexes (for sizing a
     /// publisher's bound on segments per cut).
     pub fn snapshot_segments(&self, chunk_len: usize) -> usize {
