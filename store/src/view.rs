@@ -3,7 +3,7 @@
 //! | backend | type | how it answers |
 //! |---|---|---|
 //! | live graph | [`crate::SceneGraph`] | hash map of nodes, per-layer posting sets |
-//! | archived snapshot (file or shared memory) | [`crate::ArchivedScene`] | columns of validated rkyv bytes, zero-copy |
+//! | archived snapshot (file or shared memory) | [`crate::ArchivedScene`] | validated rkyv columns, zero-copy |
 //!
 //! Every query in [`crate::query`] is generic over `V: SceneView`, so both backends run
 //! the same code and give the same answers (property-tested).
@@ -52,16 +52,20 @@ macro_rules! scene_view {
             $(
                 $(#[$req_meta:meta])*
                 fn $req:ident $(<$req_lt:lifetime>)?
-                    (&$($req_self_lt:lifetime)? $req_self:ident $(, $req_arg:ident: $req_ty:ty)* $(,)?)
-                    -> $req_ret:ty;
+                (
+                    &$($req_self_lt:lifetime)? $req_self:ident
+                    $(, $req_arg:ident: $req_ty:ty)* $(,)?
+                ) -> $req_ret:ty;
             )*
         }
         provided {
             $(
                 $(#[$pro_meta:meta])*
                 fn $pro:ident $(<$pro_lt:lifetime>)?
-                    (&$($pro_self_lt:lifetime)? $pro_self:ident $(, $pro_arg:ident: $pro_ty:ty)* $(,)?)
-                    -> $pro_ret:ty $pro_body:block
+                (
+                    &$($pro_self_lt:lifetime)? $pro_self:ident
+                    $(, $pro_arg:ident: $pro_ty:ty)* $(,)?
+                ) -> $pro_ret:ty $pro_body:block
             )*
         }
     ) => {
@@ -74,11 +78,15 @@ macro_rules! scene_view {
 
             $(
                 $(#[$req_meta])*
-                fn $req $(<$req_lt>)? (&$($req_self_lt)? $req_self $(, $req_arg: $req_ty)*) -> $req_ret;
+                fn $req $(<$req_lt>)? (
+                    &$($req_self_lt)? $req_self $(, $req_arg: $req_ty)*
+                ) -> $req_ret;
             )*
             $(
                 $(#[$pro_meta])*
-                fn $pro $(<$pro_lt>)? (&$($pro_self_lt)? $pro_self $(, $pro_arg: $pro_ty)*) -> $pro_ret $pro_body
+                fn $pro $(<$pro_lt>)? (
+                    &$($pro_self_lt)? $pro_self $(, $pro_arg: $pro_ty)*
+                ) -> $pro_ret $pro_body
             )*
         }
 
@@ -91,12 +99,16 @@ macro_rules! scene_view {
                 Self: 'a;
 
             $(
-                fn $req $(<$req_lt>)? (&$($req_self_lt)? $req_self $(, $req_arg: $req_ty)*) -> $req_ret {
+                fn $req $(<$req_lt>)? (
+                    &$($req_self_lt)? $req_self $(, $req_arg: $req_ty)*
+                ) -> $req_ret {
                     (**$req_self).$req($($req_arg),*)
                 }
             )*
             $(
-                fn $pro $(<$pro_lt>)? (&$($pro_self_lt)? $pro_self $(, $pro_arg: $pro_ty)*) -> $pro_ret {
+                fn $pro $(<$pro_lt>)? (
+                    &$($pro_self_lt)? $pro_self $(, $pro_arg: $pro_ty)*
+                ) -> $pro_ret {
                     (**$pro_self).$pro($($pro_arg),*)
                 }
             )*
@@ -136,7 +148,10 @@ scene_view! {
         /// A node's bounding box, if enabled and its sub-tree has a point.
         fn aabb<'a>(&'a self, node: Self::NodeRef<'a>) -> Option<Aabb>;
         /// Edges leaving a node, ascending by target id.
-        fn out_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a;
+        fn out_edges<'a>(
+            &'a self,
+            node: Self::NodeRef<'a>,
+        ) -> impl Iterator<Item = EdgeRef<'a>> + 'a;
         /// A node's labels, in no particular order.
         fn labels<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = &'a str> + 'a;
         /// A node's features, in no particular order.
@@ -205,7 +220,10 @@ scene_view! {
         /// Edges entering a node, ascending by source id. By default a scan of the
         /// out-edges of its layer (an edge joins two nodes of one layer): O(edges of the
         /// layer).
-        fn in_edges<'a>(&'a self, node: Self::NodeRef<'a>) -> impl Iterator<Item = EdgeRef<'a>> + 'a {
+        fn in_edges<'a>(
+            &'a self,
+            node: Self::NodeRef<'a>,
+        ) -> impl Iterator<Item = EdgeRef<'a>> + 'a {
             let id = self.node_id(node);
             let mut edges: Vec<EdgeRef<'a>> = self
                 .layer_nodes(self.node_layer(node))

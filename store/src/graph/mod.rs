@@ -10,7 +10,7 @@
 //! | `touch_log.rs` | which layers changed after a [`TouchMark`] |
 //! | `sync.rs` | [`SceneGraph::sync_to`]: equal another graph with the fewest mutations |
 //! | `invariants.rs` | [`SceneGraph::check_invariants`]: every invariant below, recounted |
-//! | `view.rs` | the [`crate::SceneView`] of the live graph |
+//! | `scene_view.rs` | the [`crate::SceneView`] of the live graph |
 //!
 //! # Invariants (checked by [`SceneGraph::check_invariants`])
 //! - Layers form a DAG; layer names are unique.
@@ -30,10 +30,10 @@ mod change_journal;
 mod invariants;
 mod point_change;
 mod scene_graph;
+mod scene_view;
 mod spatial_indexes;
 mod sync;
 mod touch_log;
-mod view;
 
 pub(crate) use change_journal::LayerChanges;
 pub(crate) use point_change::PointChange;
