@@ -73,7 +73,6 @@ pub use publisher::shm;
 mod service;
 pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
-pub mod test_pattern;
 #[cfg(test)]
 mod test_prefix;
 mod wake;
