@@ -1,5 +1,6 @@
 //! The command line, run as real processes: `ygg import`, `ygg inspect` and
-//! `ygg query` (on `.ygg` files and on a live scene), their answers across layouts,
+//! `ygg query` (on `.ygg` files and on a live scene), `ygg watch` and `ygg export` on a live
+//! scene, their answers across layouts,
 //! malformed query lines, and bad input files. The expected answers are brute force over
 //! the imported Spark-DSG file, not the query code the command runs.
 
@@ -511,6 +512,33 @@ fn live_scene_answers_like_the_file() {
         "{out}"
     );
     assert!(out.contains("node indexes: 34 nodes"), "{out}");
+
+    // `ygg watch` sees the published snapshot through SceneReader.
+    let w = scene
+        .command("ygg", &["watch", "--scene", &scene.name, "--count", "1"])
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn");
+    assert!(w.status.success(), "{}", text(&w.stderr));
+    let out = text(&w.stdout);
+    assert!(
+        out.contains(" generation=1 ") && out.contains(" nodes=171"),
+        "{out}"
+    );
+    assert!(out.contains("received 1 snapshots"), "{out}");
+
+    // `ygg export` writes the live snapshot to a file that answers like the original.
+    let exported = dir.path().join("exported.ygg");
+    let e = scene
+        .command(
+            "ygg",
+            &["export", "--scene", &scene.name, "--timeout", "20", "-o"],
+        )
+        .arg(&exported)
+        .output()
+        .expect("spawn");
+    assert!(e.status.success(), "{}", text(&e.stderr));
+    assert_eq!(query_file(&exported, &qfile), from_file);
     drop(writer);
     scene.assert_no_leftovers(Duration::from_secs(10));
 
