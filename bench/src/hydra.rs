@@ -1,4 +1,4 @@
-//! `ygg-bench hydra`: Spark-DSG's ZMQ stream consumed through `ygg-writer bridge-zmq` and
+//! `ygg-bench hydra`: Spark-DSG's ZMQ stream consumed through `ygg bridge zmq` and
 //! Yggdrasil readers, against the same number of spark_dsg `DsgReceiver`s, in one run.
 //!
 //! A Python process publishes with spark_dsg's own `DsgSender` socket
@@ -30,7 +30,7 @@ use serde_json::Value;
 use ygg_dsg::office::{OfficeParams, generate};
 use ygg_reader::SceneReader;
 use ygg_testkit::stats::median;
-use ygg_testkit::{Input, Proc};
+use ygg_testkit::{Input, Proc, TestScene};
 
 /// Arguments of `ygg-bench hydra`.
 #[derive(Parser, Debug)]
@@ -368,18 +368,19 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
 
     let mut sender = Sender::start(&args.python, &path)?;
     let endpoint = format!("tcp://127.0.0.1:{}", sender.port);
-    let writer_bin = ygg_testkit::binary("ygg-writer");
+    let ygg_bin = ygg_testkit::binary("ygg");
     let me = std::env::current_exe()?;
     let mut results: Vec<(usize, &str, [Measured; 2])> = Vec::new();
     let mut bridge_phases: Vec<(usize, &str, Phases)> = Vec::new();
     for &n in &args.consumers {
         // Our side: the bridge and n readers.
-        let scene = crate::demo::run_scene("hydra");
+        let scene = TestScene::for_run("hydra");
         let mut bridge = Proc::start(
             scene.command_for(
-                &writer_bin,
+                &ygg_bin,
                 &[
-                    "bridge-zmq",
+                    "bridge",
+                    "zmq",
                     "--connect",
                     &endpoint,
                     "--scene",

@@ -1,19 +1,17 @@
-//! `ygg-bench`: the Yggdrasil demo and benchmarks.
+//! `ygg-bench`: Yggdrasil's benchmarks (the demo is `ygg demo`, the soak `ygg-soak`).
 
 mod capi;
-mod demo;
 mod dsg_io;
 mod hydra;
 mod ipc;
 mod ladder;
 mod remote;
-mod soak;
 
 use clap::{Parser, Subcommand};
 use ygg_store::{NodeId, SceneGraph};
 
 #[derive(Parser)]
-#[command(version, about = "Yggdrasil demo and benchmarks")]
+#[command(version, about = "Yggdrasil benchmarks")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -21,12 +19,6 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// The main job: a writer process serving the built-in office with a live update
-    /// stream, and reader processes querying it (planner, visibility, labels).
-    Demo(demo::DemoArgs),
-    /// One of the demo's reader processes (planner, visibility, labels) on a live scene,
-    /// printing JSON progress and a summary line.
-    Role(demo::roles::RoleArgs),
     /// Archive size and bytes per node for feature-less graphs of 10k, 100k and 1M nodes.
     ArchiveSizes,
     /// The paper's ablation ladder on the office workload.
@@ -35,16 +27,12 @@ enum Command {
     Ipc(ipc::IpcArgs),
     /// Importing the full office (JSON and binary) against spark_dsg's own load.
     DsgIo(dsg_io::DsgIoArgs),
-    /// Hydra's ZMQ stream through `ygg-writer bridge-zmq` and Yggdrasil readers, against
+    /// Hydra's ZMQ stream through `ygg bridge zmq` and Yggdrasil readers, against
     /// the same number of spark_dsg DsgReceivers (latency, CPU), and the binary import.
     Hydra(hydra::HydraArgs),
     /// A consumer process of `hydra`: prints a JSON line per new snapshot of a scene.
     #[command(hide = true)]
     HydraReader(hydra::HydraReaderArgs),
-    /// Soak: the office stream for minutes while readers attach, detach, get killed and
-    /// restart and the writer is restarted twice; fails on a wrong answer or on growth of
-    /// memory, descriptors or /dev/shm files.
-    Soak(soak::SoakArgs),
     /// FFI overhead of the C API: the SLAM-style stream published from C++ (through the
     /// C API) and from Rust, side by side (bench/results/capi.md).
     Capi(capi::CapiArgs),
@@ -55,13 +43,10 @@ enum Command {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     match Cli::parse().command {
-        Command::Demo(args) => demo::run(&args),
-        Command::Role(args) => demo::roles::run(&args),
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
         Command::DsgIo(args) => dsg_io::run(&args),
-        Command::Soak(args) => soak::run(&args),
         Command::Capi(args) => capi::run(&args),
         Command::Hydra(args) => hydra::run(&args),
         Command::HydraReader(args) => hydra::run_reader(&args),

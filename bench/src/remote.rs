@@ -45,7 +45,7 @@ use ygg_reader::{SceneReader, SceneReceiveError};
 use ygg_store::query::children;
 use ygg_store::{NodeId, Point, SceneView};
 use ygg_testkit::stats::median_p99;
-use ygg_testkit::{Input, Proc, VethLink};
+use ygg_testkit::{Input, Proc, TestScene, VethLink};
 use ygg_transport::{ReceiveError, WriterStatus};
 use ygg_writer::SceneWriter;
 
@@ -130,8 +130,8 @@ while True:
 /// The `ygg-relay` binary beside the testkit's binaries; built once for this profile
 /// when run by cargo (`cargo run -p ygg-bench -- remote`).
 fn relay_binary() -> Result<PathBuf, String> {
-    let writer = ygg_testkit::binary("ygg-writer");
-    let dir = writer.parent().ok_or("no binary directory")?;
+    let ygg = ygg_testkit::binary("ygg");
+    let dir = ygg.parent().ok_or("no binary directory")?;
     let relay = dir.join("ygg-relay");
     if let Some(cargo) = std::env::var_os("CARGO") {
         let mut build = Command::new(cargo);
@@ -439,8 +439,8 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     let relay_bin = relay_binary()?;
     let link = VethLink::create("yb")
         .map_err(|e| format!("ygg-bench remote cannot create its two hosts: {e}"))?;
-    let robot = crate::demo::run_scene("remote-robot");
-    let remote = crate::demo::run_scene("remote-host");
+    let robot = TestScene::for_run("remote-robot");
+    let remote = TestScene::for_run("remote-host");
     let key = format!("bench/{}", robot.name);
 
     let dsg = generate(OfficeParams {

@@ -4,7 +4,7 @@ use super::model::{DsgVersion, LayerKey};
 use super::symbol::describe_id;
 
 /// The appendix of the strict errors a lenient import would tolerate.
-pub(crate) const LENIENT_HINT: &str = " (strict import; a lenient import, `ygg-writer import \
+pub(crate) const LENIENT_HINT: &str = " (strict import; a lenient import, `ygg import \
      --lenient` or `ImportOptions::LENIENT`, drops such items and reports them)";
 
 /// Why a Spark-DSG file could not be imported.

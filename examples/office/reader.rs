@@ -1,5 +1,5 @@
-//! A planner on the live office: for each new snapshot, the object nearest to the newest
-//! agent pose and the objects within 2 m of it, answered in place by
+//! A planner on the live office: for each new snapshot, the room of the newest agent pose,
+//! the object nearest to it and the objects within 2 m of it, answered in place by
 //! [`ygg_dsg::objects::Objects`], `count` times (a wait that times out counts).
 //!
 //! Run the office writer first, then
@@ -7,9 +7,9 @@
 //! (scene `office` and 30 snapshots by default).
 
 use std::time::Duration;
+use ygg_dsg::layout;
 use ygg_dsg::objects::Objects;
 use ygg_reader::SceneReader;
-use ygg_store::SceneView;
 
 /// Radius of the objects-within query, metres.
 const RADIUS: f32 = 2.0;
@@ -28,23 +28,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         };
         let view = snapshot.view(); // validated archived bytes, queried zero-copy
-        let agents = view.layer_by_name("AGENTS").ok_or("no AGENTS layer")?;
-        // The newest pose: the agents layer's largest id.
-        let pose = view
-            .layer_nodes(agents)
-            .max_by_key(|&n| view.node_id(n))
-            .and_then(|n| view.points(n).first().copied())
-            .ok_or("no agent pose yet")?;
+        // The newest agent pose and the room it is in (`ygg_dsg::layout`'s whereabouts).
+        let pose = layout::newest_pose(&view)
+            .ok_or("no agent pose yet")?
+            .position;
+        let room = layout::room_of(&view, &pose);
         let objects = Objects::new(&view);
         let nearest = objects.nearest_object(pose)?;
         let within = objects.objects_within(pose, RADIUS)?;
         let list: Vec<String> = within.iter().map(|id| id.0.to_string()).collect();
         println!(
-            "generation={} pose={:.2},{:.2},{:.2} nearest={} within={} ids={}",
+            "generation={} pose={:.2},{:.2},{:.2} room={} nearest={} within={} ids={}",
             snapshot.generation(),
             pose[0],
             pose[1],
             pose[2],
+            room.map_or("none".to_owned(), |id| id.0.to_string()),
             nearest.map_or("none".to_owned(), |id| id.0.to_string()),
             within.len(),
             if list.is_empty() {

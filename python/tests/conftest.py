@@ -25,7 +25,7 @@ def binary(name):
         p = pathlib.Path(d) / name
         if p.exists():
             return str(p)
-    pytest.skip(f"{name} is not built (cargo build -p ygg-reader -p ygg-writer)")
+    pytest.skip(f"{name} is not built (cargo build -p ygg-cli)")
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,4 @@
-"""`scene.query(...)` and `scene.objects` answer exactly what `ygg-reader query` answers
+"""`scene.query(...)` and `scene.objects` answer exactly what `ygg query` answers
 for the same lines, on the office in every layout."""
 import json
 import subprocess
@@ -44,7 +44,7 @@ def query_lines(scene, n=60, seed=3):
 def cli_answers(path, lines, tmp_path):
     q = tmp_path / "queries.jsonl"
     q.write_text("".join(json.dumps(line) + "\n" for line in lines))
-    run = subprocess.run([binary("ygg-reader"), "query", str(path), "--queries", str(q)],
+    run = subprocess.run([binary("ygg"), "query", str(path), "--queries", str(q)],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     return [json.loads(line) for line in run.stdout.splitlines()]

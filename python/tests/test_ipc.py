@@ -13,7 +13,7 @@ from conftest import binary
 
 
 def test_python_reader_follows_a_rust_writer(scene_name, procs):
-    writer = procs([binary("ygg-writer"), "serve", "--scene", scene_name, "--scale", "0.05",
+    writer = procs([binary("ygg"), "serve", "--scene", scene_name, "--scale", "0.05",
                     "--rate", "30", "--seconds", "30"])
     with yggdrasil.Reader(scene_name, wait_for_writer=20) as reader:
         generations = []
@@ -37,7 +37,7 @@ def test_python_reader_follows_a_rust_writer(scene_name, procs):
 def test_rust_reader_follows_a_python_writer(scene_name, procs):
     graph = yggdrasil.office_graph("mint", scale=0.05)
     with yggdrasil.Writer(scene_name, graph) as writer, contextlib.ExitStack() as stack:
-        watch = procs([binary("ygg-reader"), "watch", "--scene", scene_name, "--count", "4",
+        watch = procs([binary("ygg"), "watch", "--scene", scene_name, "--count", "4",
                        "--wait-for-writer", "10"])
         mine = stack.enter_context(yggdrasil.Reader(scene_name, wait_for_writer=5))
         first = mine.wait_next(5)
@@ -59,7 +59,7 @@ def test_rust_reader_follows_a_python_writer(scene_name, procs):
         assert code == 0, err
         assert "received 4 snapshots" in out or out.count("\n") >= 4, out
         line = json.dumps({"op": "nearest_object", "point": [0.0, 0.0, 0.0]})
-        run = subprocess.run([binary("ygg-reader"), "query", "--scene", scene_name],
+        run = subprocess.run([binary("ygg"), "query", "--scene", scene_name],
                              input=line + "\n", capture_output=True, text=True, timeout=60)
         assert run.returncode == 0, run.stderr
         assert json.loads(run.stdout) == mine.latest().query(line)

@@ -4,7 +4,7 @@ Read side:
     scene = yggdrasil.open("office.ygg")          # a .ygg snapshot file, mapped
     reader = yggdrasil.Reader("office", wait_for_writer=5)
     scene = reader.wait_next(1.0)                 # a live scene's next snapshot
-    scene.objects.nearest([5, 5, 1])              # the object contract of ygg-reader query
+    scene.objects.nearest([5, 5, 1])              # the object contract of ygg query
     scene.node(42).points                         # read-only numpy view of the mapped bytes
 
 Write side:

@@ -4,11 +4,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-/// Env var naming a directory that holds prebuilt `ygg-writer` / `ygg-reader` /
-/// `ygg-bench` / `ygg-relay` binaries (examples in its `examples/` folder).
+/// Env var naming a directory that holds prebuilt `ygg` / `ygg-relay` / `ygg-bench` /
+/// `ygg-test-writer` / `ygg-test-reader` / `ygg-soak` binaries (examples in its
+/// `examples/` folder).
 pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 
-/// Path of the workspace binary `name` (`ygg-writer`, `ygg-reader`, `ygg-bench` or `ygg-relay`).
+/// Path of the workspace binary `name`: `ygg` (the command line, `ygg-cli`), `ygg-relay`,
+/// `ygg-bench`, or a test driver of this crate (`ygg-test-writer`, `ygg-test-reader`,
+/// `ygg-soak`).
 ///
 /// Binaries of other packages are not exposed to this package by cargo
 /// (`CARGO_BIN_EXE_*` is per package), so the harness takes them from [`ENV_BIN_DIR`] if set,
@@ -16,9 +19,10 @@ pub const ENV_BIN_DIR: &str = "YGG_BIN_DIR";
 /// (`target/<profile>/deps/ipc-…` -> `target/<profile>/`). When run by cargo, it first builds
 /// them once for that profile and target directory, with the features the running
 /// executable was compiled with, so that only the binaries' final link can be new (cargo
-/// releases its lock while tests and `cargo run` binaries run): `cargo run -p ygg-bench`
-/// runs `cargo build -p ygg-writer -p ygg-reader -p ygg-bench --bins`, a test (and a tool
-/// a test starts) `cargo build --workspace --bins --examples --tests` (what
+/// releases its lock while tests and `cargo run` binaries run): a tool run by cargo
+/// (`cargo run -p ygg-bench`, `cargo run -p ygg-testkit --bin ygg-soak`) runs
+/// `cargo build -p ygg-cli -p ygg-bench -p ygg-testkit --bins`, a test (and a tool a test
+/// starts) `cargo build --workspace --bins --examples --tests` (what
 /// `cargo test --workspace` compiled).
 ///
 /// # Panics
@@ -54,17 +58,19 @@ fn existing(path: PathBuf) -> PathBuf {
 /// and gigabytes in `target/`).
 const FROM_A_TEST: [&str; 4] = ["--workspace", "--bins", "--examples", "--tests"];
 
-/// What a tool run by `cargo run -p ygg-bench` builds: the executables it starts, with the
-/// features of `-p ygg-bench` (which depends on the writer and the reader).
+/// What a tool run by cargo (a bench or the soak) builds: the executables it starts.
 const FROM_A_TOOL: [&str; 7] = [
     "-p",
-    "ygg-writer",
-    "-p",
-    "ygg-reader",
+    "ygg-cli",
     "-p",
     "ygg-bench",
+    "-p",
+    "ygg-testkit",
     "--bins",
 ];
+
+/// The packages whose binaries are tools that start other workspace binaries.
+const TOOLS: [&str; 2] = ["ygg-bench", "ygg-testkit"];
 
 /// The directory of prebuilt binaries ([`ENV_BIN_DIR`]), or the profile directory of this
 /// executable after the `cargo build` above there (when run by cargo); built once.
@@ -86,7 +92,7 @@ fn built_profile_dir() -> &'static Path {
             // `cargo run -p ygg-bench` sets CARGO_PKG_NAME to ygg-bench; a tool a test starts
             // inherits the test's (and the test has built the workspace's set).
             let run_as_a_tool = !from_a_test
-                && std::env::var("CARGO_PKG_NAME").is_ok_and(|name| name == "ygg-bench");
+                && std::env::var("CARGO_PKG_NAME").is_ok_and(|name| TOOLS.contains(&name.as_str()));
             let what: &[&str] = if run_as_a_tool {
                 &FROM_A_TOOL
             } else {

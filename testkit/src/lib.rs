@@ -1,4 +1,4 @@
-//! Dev-only harness for Yggdrasil's multi-process tests, benches and demo.
+//! Dev-only harness for Yggdrasil's multi-process tests and benches, and the test drivers.
 //!
 //! * [`binary`] and [`example`] find (and if needed build) the workspace's executables.
 //! * [`TestScene`] gives each test or run a unique scene name and iceoryx2 prefix, so
@@ -14,12 +14,19 @@
 //!   builds with fresh ones.
 //! * [`VethLink`] makes two hosts on one machine (network namespaces joined by a veth
 //!   pair) for what crosses a network.
+//! * [`test_pattern`] is the synthetic segment content of the transport tests.
+//!
+//! Binaries (test drivers, never part of the product): `ygg-test-writer` publishes
+//! synthetic segments ([`test_pattern`]) and `ygg-test-reader` watches or dumps a scene at
+//! the transport level, checking them; `ygg-soak` runs the demo's writer and readers for
+//! minutes under churn (`cargo run --release -p ygg-testkit --bin ygg-soak -- --minutes 2`).
 
 mod binary;
 pub mod fingerprint;
 mod proc;
 mod scene;
 pub mod stats;
+pub mod test_pattern;
 mod veth;
 mod watchdog;
 

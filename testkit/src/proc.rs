@@ -12,8 +12,9 @@ use rustix::process::{Pid, Signal, kill_process};
 
 use crate::Watchdog;
 
-/// Env var [`Proc::start`] sets to the parent's pid, for [`die_with_parent`].
-pub const ENV_PARENT_PID: &str = "YGG_TESTKIT_PARENT";
+/// Env var [`Proc::start`] sets to the parent's pid, for [`die_with_parent`] (and for
+/// `ygg demo-role`, which reads the same variable).
+pub const ENV_PARENT_PID: &str = "YGG_PARENT_PID";
 
 /// How long a dropped [`Proc`] whose stdin was piped may take to exit after stdin closed,
 /// before it is killed.

@@ -39,6 +39,21 @@ impl TestScene {
         }
     }
 
+    /// The scene of a tool's run (a bench, the soak): [`TestScene::new`], but under the
+    /// prefix a caller set in [`ENV_IOX2_PREFIX`] if any (tests do, to check what the run
+    /// leaves), after removing what killed earlier runs left ([`remove_stale`]).
+    pub fn for_run(tag: &str) -> Self {
+        let removed = remove_stale();
+        if removed > 0 {
+            eprintln!("removed {removed} files left by earlier, killed runs");
+        }
+        let mut scene = Self::new(tag);
+        if let Ok(prefix) = std::env::var(ENV_IOX2_PREFIX) {
+            scene.prefix = prefix;
+        }
+        scene
+    }
+
     /// Sets this scene's prefix in `command`'s environment (and clears `IOX2_LOG_LEVEL`).
     pub fn configure<'c>(&self, command: &'c mut Command) -> &'c mut Command {
         command
@@ -59,18 +74,18 @@ impl TestScene {
         self.command_for(&binary(binary_name), args)
     }
 
-    /// Spawns `ygg-writer serve-test --scene <name> <args>`.
+    /// Spawns `ygg-test-writer --scene <name> <args>` (synthetic segments).
     pub fn spawn_writer(&self, args: &[&str], watchdog: &Watchdog) -> Proc {
-        let mut all = vec!["serve-test", "--scene", &self.name];
+        let mut all = vec!["--scene", &self.name];
         all.extend_from_slice(args);
-        Proc::spawn(self.command("ygg-writer", &all), "writer", watchdog)
+        Proc::spawn(self.command("ygg-test-writer", &all), "writer", watchdog)
     }
 
-    /// Spawns `ygg-reader <sub> --scene <name> <args>`.
+    /// Spawns `ygg-test-reader <sub> --scene <name> <args>` (`watch` or `dump`).
     pub fn spawn_reader(&self, sub: &str, args: &[&str], watchdog: &Watchdog) -> Proc {
         let mut all = vec![sub, "--scene", &self.name];
         all.extend_from_slice(args);
-        Proc::spawn(self.command("ygg-reader", &all), "reader", watchdog)
+        Proc::spawn(self.command("ygg-test-reader", &all), "reader", watchdog)
     }
 
     /// Every file of this scene's prefix below `/dev/shm` (iceoryx2's node and service

@@ -1,4 +1,4 @@
-//! `ygg-writer bridge-zmq` against the real peer: a Python process publishing with
+//! `ygg bridge zmq` against the real peer: a Python process publishing with
 //! spark_dsg's own `DsgSender` (pip `spark-dsg==1.1.3 pyzmq`, `tests/python/dsg_sender.py`)
 //! sends the office, then a sequence of edits; after each, this process (a reader of
 //! the bridge's scene) checks that its snapshot equals the graph sent, that nearest-object
@@ -159,9 +159,10 @@ fn bridge_follows_a_spark_dsg_sender_and_republishes_only_the_layers_touched() {
     let endpoint = format!("tcp://127.0.0.1:{port}");
     let bridge = Proc::spawn(
         scene.command(
-            "ygg-writer",
+            "ygg",
             &[
-                "bridge-zmq",
+                "bridge",
+                "zmq",
                 "--connect",
                 &endpoint,
                 "--scene",
@@ -372,9 +373,9 @@ fn bridge_refuses_bad_arguments_and_an_unreachable_endpoint_cleanly() {
         ),
     ];
     for (args, needle) in cases {
-        let mut all: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"bridge-zmq"];
+        let mut all: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"bridge", &"zmq"];
         all.extend(args.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
-        let out = run("ygg-writer", &all);
+        let out = run("ygg", &all);
         let stderr = text(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");

@@ -1,6 +1,8 @@
-//! The command line, run as real processes: `ygg-writer import`, `ygg-reader inspect` and
-//! `ygg-reader query` (on `.ygg` files and on a live scene), their answers across layouts,
-//! malformed query lines, and bad input files.
+//! The command line, run as real processes: `ygg import`, `ygg inspect` and
+//! `ygg query` (on `.ygg` files and on a live scene), `ygg watch` and `ygg export` on a live
+//! scene, their answers across layouts,
+//! malformed query lines, and bad input files. The expected answers are brute force over
+//! the imported Spark-DSG file, not the query code the command runs.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,8 +11,10 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 use ygg_dsg::layout::{self, Layout};
-use ygg_dsg::objects::{ObjectQuery, Objects};
+use ygg_dsg::objects::cone_view;
 use ygg_dsg::{DsgGraph, NodeKind};
+use ygg_store::query::within_radius;
+use ygg_store::{Point, distance_squared};
 use ygg_testkit::{TestScene, binary, run, text};
 use ygg_writer::SceneWriter;
 
@@ -37,7 +41,7 @@ fn assert_fails(out: &Output, needles: &[&str]) {
 
 fn import(input: &Path, layout: Layout, out: &Path) {
     let o = run(
-        "ygg-writer",
+        "ygg",
         &[&"import", &input, &"--layout", &layout.name(), &"-o", &out],
     );
     assert!(o.status.success(), "import failed: {}", text(&o.stderr));
@@ -128,7 +132,7 @@ fn write_lines(path: &Path, lines: &[Value]) {
 
 fn query_file(snapshot: &Path, queries: &Path) -> String {
     let o = run(
-        "ygg-reader",
+        "ygg",
         &[&"query", &snapshot, &"--queries", &queries, &"--timing"],
     );
     assert!(o.status.success(), "query failed: {}", text(&o.stderr));
@@ -140,20 +144,84 @@ fn query_file(snapshot: &Path, queries: &Path) -> String {
     text(&o.stdout)
 }
 
-/// What the contract expects for each query, from the store in-process.
+/// What the contract expects for each query, by brute force straight from the imported
+/// Spark-DSG graph (as `dsg/tests/objects.rs` computes it): an object's geometry is its
+/// claimed mesh vertices, or its position when it claims none; nearest ties go to the
+/// smaller id. Independent of `ygg_dsg::objects::Objects`, the code under test.
 fn expected(d: &DsgGraph, queries: &[Value]) -> Vec<Value> {
-    let g = layout::build(d, Layout::Vanilla).expect("build");
-    let objects = Objects::new(&g);
+    let objects: Vec<(u64, Vec<Point>)> = d
+        .nodes_of_kind(NodeKind::Object)
+        .map(|n| {
+            let pts: Vec<Point> = d.mesh.as_ref().map_or_else(Vec::new, |m| {
+                n.mesh_connections
+                    .iter()
+                    .map(|&v| m.points[v as usize])
+                    .collect()
+            });
+            if pts.is_empty() {
+                (n.id, vec![n.position])
+            } else {
+                (n.id, pts)
+            }
+        })
+        .collect();
+    let labels = |n: &ygg_dsg::DsgNode| -> Vec<String> {
+        n.label
+            .iter()
+            .cloned()
+            .chain(n.semantic_label.map(|l| l.to_string()))
+            .collect()
+    };
+    let any_point = |hit: &dyn Fn(&Point) -> bool| -> Vec<u64> {
+        objects
+            .iter()
+            .filter(|(_, pts)| pts.iter().any(hit))
+            .map(|o| o.0)
+            .collect()
+    };
+    let f = |v: &Value| v.as_f64().expect("a number") as f32;
+    let p = |v: &Value| -> Point { [f(&v[0]), f(&v[1]), f(&v[2])] };
     queries
         .iter()
         .map(|q| {
-            let q = ObjectQuery::from_value(q).expect("valid query");
-            let ids: Vec<u64> = objects
-                .answer(&q)
-                .expect("answer")
-                .iter()
-                .map(|i| i.0)
-                .collect();
+            let mut ids: Vec<u64> = match q["op"].as_str().expect("op") {
+                "nearest_object" => {
+                    let point = p(&q["point"]);
+                    let mut best: Option<(f32, u64)> = None;
+                    for (id, pts) in &objects {
+                        for x in pts {
+                            let dist = distance_squared(x, &point).sqrt();
+                            if best.is_none_or(|(bd, bid)| dist < bd || (dist == bd && *id < bid)) {
+                                best = Some((dist, *id));
+                            }
+                        }
+                    }
+                    best.map(|b| b.1).into_iter().collect()
+                }
+                "objects_within" => {
+                    let (point, radius) = (p(&q["point"]), f(&q["radius"]));
+                    any_point(&|x| within_radius(x, &point, radius))
+                }
+                "visible_objects" => {
+                    let cone = cone_view(
+                        p(&q["eye"]),
+                        p(&q["dir"]),
+                        f(&q["half_angle_deg"]),
+                        f(&q["range"]),
+                    )
+                    .expect("a valid cone");
+                    any_point(&|x| cone.contains(x).expect("a finite point"))
+                }
+                "objects_with_label" => {
+                    let label = q["label"].as_str().expect("label").to_owned();
+                    d.nodes_of_kind(NodeKind::Object)
+                        .filter(|n| labels(n).contains(&label))
+                        .map(|n| n.id)
+                        .collect()
+                }
+                op => panic!("unknown op {op}"),
+            };
+            ids.sort_unstable();
             json!({ "ids": ids })
         })
         .collect()
@@ -290,7 +358,7 @@ fn malformed_lines_are_answered_with_errors_and_the_rest_still_answered() {
     assert_eq!(next_good, good.len());
 
     // The same through standard input.
-    let mut child = Command::new(binary("ygg-reader"))
+    let mut child = Command::new(binary("ygg"))
         .args([Path::new("query"), &ygg])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -312,7 +380,7 @@ fn malformed_lines_are_answered_with_errors_and_the_rest_still_answered() {
 /// Hydra output (no labelspace), label ids and names in the office.
 #[test]
 fn inspect_lists_object_labels() {
-    let o = run("ygg-reader", &[&"inspect", &fixture("apartment_dsg.json")]);
+    let o = run("ygg", &[&"inspect", &fixture("apartment_dsg.json")]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
     let rows = |out: &str| -> Vec<Vec<String>> {
@@ -332,7 +400,7 @@ fn inspect_lists_object_labels() {
         [["5", "-", "3"], ["11", "-", "2"], ["16", "-", "2"]],
         "{out}"
     );
-    let o = run("ygg-reader", &[&"inspect", &fixture("office_tiny.json")]);
+    let o = run("ygg", &[&"inspect", &fixture("office_tiny.json")]);
     let out = text(&o.stdout);
     let rows = rows(&out);
     assert_eq!(rows.len(), 27, "{out}");
@@ -350,7 +418,7 @@ fn inspect_shows_layers_dag_indexes_and_memory() {
     let dir = tempfile::tempdir().expect("tempdir");
     let ygg = dir.path().join("mint.ygg");
     import(&fixture("office_tiny.json"), Layout::Mint, &ygg);
-    let o = run("ygg-reader", &[&"inspect", &ygg, &"--verbose"]);
+    let o = run("ygg", &[&"inspect", &ygg, &"--verbose"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
     for needle in [
@@ -368,7 +436,7 @@ fn inspect_shows_layers_dag_indexes_and_memory() {
     }
 
     // The paper's static table from the Spark-DSG file.
-    let o = run("ygg-reader", &[&"inspect", &fixture("office_tiny.json")]);
+    let o = run("ygg", &[&"inspect", &fixture("office_tiny.json")]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let out = text(&o.stdout);
     for l in Layout::ALL {
@@ -378,7 +446,7 @@ fn inspect_shows_layers_dag_indexes_and_memory() {
         );
     }
     let o = run(
-        "ygg-reader",
+        "ygg",
         &[
             &"inspect",
             &fixture("office_tiny.json"),
@@ -414,7 +482,7 @@ fn live_scene_answers_like_the_file() {
 
     let q = scene
         .command(
-            "ygg-reader",
+            "ygg",
             &[
                 "query",
                 "--scene",
@@ -432,7 +500,7 @@ fn live_scene_answers_like_the_file() {
 
     let i = scene
         .command(
-            "ygg-reader",
+            "ygg",
             &["inspect", "--scene", &scene.name, "--timeout", "20"],
         )
         .output()
@@ -444,16 +512,40 @@ fn live_scene_answers_like_the_file() {
         "{out}"
     );
     assert!(out.contains("node indexes: 34 nodes"), "{out}");
+
+    // `ygg watch` sees the published snapshot through SceneReader.
+    let w = scene
+        .command("ygg", &["watch", "--scene", &scene.name, "--count", "1"])
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn");
+    assert!(w.status.success(), "{}", text(&w.stderr));
+    let out = text(&w.stdout);
+    assert!(
+        out.contains(" generation=1 ") && out.contains(" nodes=171"),
+        "{out}"
+    );
+    assert!(out.contains("received 1 snapshots"), "{out}");
+
+    // `ygg export` writes the live snapshot to a file that answers like the original.
+    let exported = dir.path().join("exported.ygg");
+    let e = scene
+        .command(
+            "ygg",
+            &["export", "--scene", &scene.name, "--timeout", "20", "-o"],
+        )
+        .arg(&exported)
+        .output()
+        .expect("spawn");
+    assert!(e.status.success(), "{}", text(&e.stderr));
+    assert_eq!(query_file(&exported, &qfile), from_file);
     drop(writer);
     scene.assert_no_leftovers(Duration::from_secs(10));
 
     // No writer: a clear error naming the scene, quickly.
     let gone = TestScene::new("cli-none");
     let o = gone
-        .command(
-            "ygg-reader",
-            &["query", "--scene", &gone.name, "--timeout", "0.2"],
-        )
+        .command("ygg", &["query", "--scene", &gone.name, "--timeout", "0.2"])
         .stdin(Stdio::null())
         .output()
         .expect("spawn");
@@ -478,7 +570,7 @@ fn bad_import_input_is_a_clear_error_naming_file_node_and_field() {
     let out = d.join("out.ygg");
     let import_fails = |input: &Path, needles: &[&str]| {
         let o = run(
-            "ygg-writer",
+            "ygg",
             &[&"import", &input, &"--layout", &"mint", &"-o", &out],
         );
         let name = input.display().to_string();
@@ -534,7 +626,7 @@ fn bad_import_input_is_a_clear_error_naming_file_node_and_field() {
 
     // Unknown layout: clap's error lists the layouts.
     let o = run(
-        "ygg-writer",
+        "ygg",
         &[
             &"import",
             &fixture("office_tiny.json"),
@@ -548,7 +640,7 @@ fn bad_import_input_is_a_clear_error_naming_file_node_and_field() {
     // An output directory that does not exist.
     let nowhere = d.join("no/such/dir/out.ygg");
     let o = run(
-        "ygg-writer",
+        "ygg",
         &[&"import", &fixture("office_tiny.json"), &"-o", &nowhere],
     );
     assert_fails(&o, &[&nowhere.display().to_string(), "cannot write"]);
@@ -578,25 +670,25 @@ fn bad_snapshot_and_query_files_are_clear_errors() {
 
     for bad in [&truncated, &empty, &foreign, &missing] {
         let name = bad.display().to_string();
-        let o = run("ygg-reader", &[&"query", bad, &"--queries", &q]);
+        let o = run("ygg", &[&"query", bad, &"--queries", &q]);
         assert_fails(&o, &[&name]);
-        let o = run("ygg-reader", &[&"inspect", bad]);
+        let o = run("ygg", &[&"inspect", bad]);
         assert_fails(&o, &[&name]);
     }
     // A flipped byte may land in padding; it must never crash.
-    let o = run("ygg-reader", &[&"query", &flipped_path, &"--queries", &q]);
+    let o = run("ygg", &[&"query", &flipped_path, &"--queries", &q]);
     assert_ne!(o.status.code(), Some(101), "{}", text(&o.stderr));
     assert!(!text(&o.stderr).contains("panicked"));
 
     let no_queries = d.join("no_queries.jsonl");
-    let o = run("ygg-reader", &[&"query", &ygg, &"--queries", &no_queries]);
+    let o = run("ygg", &[&"query", &ygg, &"--queries", &no_queries]);
     assert_fails(&o, &[&no_queries.display().to_string(), "cannot read"]);
 
     let bad_json = d.join("bad.json");
     std::fs::write(&bad_json, b"{\"nodes\": [").expect("write");
-    let o = run("ygg-reader", &[&"inspect", &bad_json]);
+    let o = run("ygg", &[&"inspect", &bad_json]);
     assert_fails(&o, &[&bad_json.display().to_string()]);
-    let o = run("ygg-reader", &[&"inspect", &ygg, &"--layouts", &"mint"]);
+    let o = run("ygg", &[&"inspect", &ygg, &"--layouts", &"mint"]);
     assert_fails(&o, &["--layouts"]);
 }
 
@@ -607,7 +699,7 @@ fn serve_splits_the_office_into_rooms_or_says_why_not() {
         let mut args = vec!["serve", "--scene", &scene.name, "--rate", "0"];
         args.extend_from_slice(extra);
         scene
-            .command("ygg-writer", &args)
+            .command("ygg", &args)
             .stdin(Stdio::null())
             .output()
             .expect("spawn")

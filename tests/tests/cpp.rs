@@ -1,5 +1,5 @@
 //! End-to-end tests of the C/C++ API: the C++ example writer (`examples/cpp/writer.cpp`,
-//! built by CMake) serves a scene, and a Rust reader process, the `ygg-reader` CLI and
+//! built by CMake) serves a scene, and a Rust reader process, the `ygg query` CLI and
 //! the C++ example reader read it; their answers are checked against what the writer
 //! builds. The writer must stop cleanly on SIGTERM and leave nothing in `/dev/shm`.
 //!
@@ -122,17 +122,14 @@ fn cpp_writer_is_read_by_a_rust_reader_and_the_ygg_reader_cli() {
         "{generations:?}"
     );
 
-    // The ygg-reader CLI on the live scene: the object contract's answers.
+    // The ygg CLI on the live scene: the object contract's answers.
     let mut query = scene
-        .command(
-            "ygg-reader",
-            &["query", "--scene", &scene.name, "--timeout", "20"],
-        )
+        .command("ygg", &["query", "--scene", &scene.name, "--timeout", "20"])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("spawn ygg-reader query");
+        .expect("spawn ygg query");
     let lines = [
         r#"{"op":"nearest_object","point":[10,2,0.5]}"#,
         r#"{"op":"objects_with_label","label":"plant"}"#,
@@ -146,7 +143,7 @@ fn cpp_writer_is_read_by_a_rust_reader_and_the_ygg_reader_cli() {
         .expect("stdin")
         .write_all(lines.join("\n").as_bytes())
         .expect("write queries");
-    let out = query.wait_with_output().expect("ygg-reader query");
+    let out = query.wait_with_output().expect("ygg query");
     assert!(out.status.success(), "{}", text(&out.stderr));
     let answers: Vec<String> = text(&out.stdout).lines().map(str::to_owned).collect();
     assert_eq!(

@@ -1,5 +1,5 @@
-//! Cross-process tests of the shared-memory transport: real `ygg-writer` / `ygg-reader`
-//! processes (plus in-process readers and writers where a test needs to look inside).
+//! Cross-process tests of the shared-memory transport: real `ygg-test-writer` /
+//! `ygg-test-reader` processes (ygg-testkit's drivers) (plus in-process readers and writers where a test needs to look inside).
 //!
 //! Every test has its own scene name and iceoryx2 prefix, a watchdog, and checks that it left
 //! nothing in `/dev/shm` (see `ygg_tests`).
@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::{NodeBuilder, ServiceName};
 use rustix::process::Signal;
-use ygg_testkit::{TestScene, Watchdog, field};
+use ygg_testkit::{TestScene, Watchdog, field, test_pattern};
 use ygg_transport::protocol::{
     self, BLOCK_SIZE, Block128, EVENT_SNAPSHOT_PUBLISHED, MANIFEST_LAYER_ID, MANIFEST_MAGIC,
     ManifestEntry, SegmentError, SegmentHeader, SegmentKind,
@@ -18,7 +18,7 @@ use ygg_transport::protocol::{
 use ygg_transport::service::{self, Ipc};
 use ygg_transport::{
     PublishError, PublisherBuilder, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder,
-    WriterStatus, test_pattern,
+    WriterStatus,
 };
 
 /// Generous bound for any single step (debug builds on a busy 2-core machine).

@@ -1,4 +1,4 @@
-//! `ygg-writer import` of real Hydra output with faults, as a real process: the
+//! `ygg import` of real Hydra output with faults, as a real process: the
 //! apartment file with an edge to an absent node, a duplicated edge and a node of an
 //! undeclared layer. Strict (the default) refuses, naming the problem and `--lenient`;
 //! `--lenient` imports the rest and prints each class dropped with its count and first
@@ -42,7 +42,7 @@ fn import_is_strict_by_default_and_lenient_on_request() {
     write_faulty_apartment(&input);
     let out = dir.path().join("apartment.ygg");
 
-    let strict = run("ygg-writer", &[&"import", &input, &"-o", &out, &"-q"]);
+    let strict = run("ygg", &[&"import", &input, &"-o", &out, &"-q"]);
     let stderr = text(&strict.stderr);
     assert!(
         !strict.status.success(),
@@ -60,7 +60,7 @@ fn import_is_strict_by_default_and_lenient_on_request() {
     assert!(!out.exists(), "a refused import left a snapshot");
 
     let lenient = run(
-        "ygg-writer",
+        "ygg",
         &[
             &"import",
             &input,
@@ -109,7 +109,7 @@ fn import_is_strict_by_default_and_lenient_on_request() {
     let clean =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../dsg/tests/fixtures/apartment_dsg.sparkdsg");
     let o = run(
-        "ygg-writer",
+        "ygg",
         &[&"import", &clean, &"-o", &out, &"-q", &"--lenient"],
     );
     assert!(o.status.success(), "{}", text(&o.stderr));

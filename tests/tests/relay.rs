@@ -76,7 +76,7 @@ impl Hosts {
         // its Zenoh dependencies takes minutes on a fresh 2-core machine, and a watchdog that
         // fired during it killed the test's writer (seen in a clean-clone CI run).
         binary("ygg-relay");
-        binary("ygg-writer");
+        binary("ygg");
         let robot = TestScene::new(tag);
         let remote = TestScene::new(tag);
         let key = format!("test/{}", robot.name);
@@ -88,7 +88,7 @@ impl Hosts {
         })
     }
 
-    /// `ygg-writer serve` of a small office on the robot at `rate` updates per second.
+    /// `ygg serve` of a small office on the robot at `rate` updates per second.
     fn writer(&self, rate: &str, watchdog: &Watchdog) -> Proc {
         let args = [
             "serve",
@@ -99,9 +99,7 @@ impl Hosts {
             "--rate",
             rate,
         ];
-        let command = self
-            .link
-            .command(0, &self.robot, &binary("ygg-writer"), &args);
+        let command = self.link.command(0, &self.robot, &binary("ygg"), &args);
         let writer = Proc::spawn(command, "writer", watchdog);
         writer.expect_line(STEP, |l| l.contains("\"ready\""));
         writer
@@ -145,9 +143,9 @@ impl Hosts {
         Proc::spawn(command, "importer", watchdog)
     }
 
-    /// `ygg-reader <args>` on the remote host, on `scene`.
+    /// `ygg <args>` on the remote host, on `scene`.
     fn remote_reader(&self, scene: &TestScene, args: &[&str], watchdog: &Watchdog) -> Proc {
-        let command = self.link.command(1, scene, &binary("ygg-reader"), args);
+        let command = self.link.command(1, scene, &binary("ygg"), args);
         Proc::spawn(command, "remote reader", watchdog)
     }
 }
@@ -264,7 +262,7 @@ fn assert_same_snapshots(local: &Recorder, remote: &Recorder, min: usize) {
     );
 }
 
-/// Query lines for `ygg-reader query`.
+/// Query lines for `ygg query`.
 const QUERIES: &str = r#"{"op":"nearest_object","point":[1.0,2.0,0.5]}
 {"op":"objects_within","point":[3.0,3.0,1.0],"radius":2.0}
 {"op":"visible_objects","eye":[0.0,0.0,1.0],"dir":[1.0,0.0,0.0],"half_angle_deg":50,"range":8}
@@ -295,9 +293,9 @@ fn a_late_importer_resyncs_by_query_and_remote_answers_equal_local_ones() {
         let args = ["query", "--scene", &scene.name, "--queries", q];
         let out = hosts
             .link
-            .command(side, scene, &binary("ygg-reader"), &args)
+            .command(side, scene, &binary("ygg"), &args)
             .output()
-            .expect("run ygg-reader query");
+            .expect("run ygg query");
         assert!(
             out.status.success(),
             "{}",
@@ -321,11 +319,11 @@ fn a_late_importer_resyncs_by_query_and_remote_answers_equal_local_ones() {
         .command(
             1,
             &hosts.remote,
-            &binary("ygg-reader"),
+            &binary("ygg"),
             &["inspect", "--scene", &hosts.remote.name],
         )
         .output()
-        .expect("run ygg-reader inspect");
+        .expect("run ygg inspect");
     assert!(
         inspect.status.success(),
         "{}",

@@ -128,7 +128,7 @@ fn a_save_that_runs_out_of_room_fails_clearly_and_keeps_the_old_file() {
     let script = "trap '' XFSZ; ulimit -f 128; exec \"$0\" import \"$1\" --layout mint -o \"$2\"";
     let output = Command::new("sh")
         .args(["-c", script])
-        .arg(binary("ygg-writer"))
+        .arg(binary("ygg"))
         .arg(&input)
         .arg(&out)
         .output()

@@ -1,5 +1,5 @@
 //! End-to-end tests of the scene layer over shared memory with real processes: a
-//! `ygg-writer serve` process publishing the office with a live update stream, reader
+//! `ygg serve` process publishing the office with a live update stream, reader
 //! processes and in-process readers querying validated snapshots, corrupted archives
 //! refused, and the demo stopped by Ctrl-C leaving nothing behind.
 
@@ -45,7 +45,7 @@ fn snapshot_after(reader: &mut SceneReader, generation: u64) -> SceneSnapshot {
 fn spawn_serve(scene: &TestScene, watchdog: &Watchdog, extra: &[&str]) -> Proc {
     let mut args = vec!["serve", "--scene", scene.name.as_str(), "--scale", "0.05"];
     args.extend_from_slice(extra);
-    Proc::spawn(scene.command("ygg-writer", &args), "writer", watchdog)
+    Proc::spawn(scene.command("ygg", &args), "writer", watchdog)
 }
 
 #[test]
@@ -104,9 +104,9 @@ fn served_office_is_validated_once_per_layer_and_answers_like_brute_force() {
     // A reader process (the demo's planner) agrees with brute force on every check.
     let mut planner = Proc::spawn(
         scene.command(
-            "ygg-bench",
+            "ygg",
             &[
-                "role",
+                "demo-role",
                 "--scene",
                 &scene.name,
                 "--role",
@@ -291,7 +291,7 @@ fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
     let watchdog = Watchdog::new(WATCHDOG);
     let mut demo = Proc::spawn(
         scene.command(
-            "ygg-bench",
+            "ygg",
             &[
                 "demo",
                 "--seconds",

@@ -1,4 +1,4 @@
-//! `ygg-bench soak` with real processes: a short run passes every check (writer SIGKILLed
+//! `ygg-soak` (ygg-testkit) with real processes: a short run passes every check (writer SIGKILLed
 //! and SIGTERMed and picked up by the readers, reader churn, brute-force checks,
 //! descriptors and `/dev/shm` files back to their start values), Ctrl-C stops it leaving
 //! nothing behind, and a reader role stops on SIGTERM even while it waits for a writer.
@@ -24,9 +24,8 @@ fn a_short_soak_passes_every_check_and_leaves_nothing() {
     // bound is loose here; the 2-minute CI run and the 30-minute soak hold the real one.
     let mut soak = Proc::spawn(
         scene.command(
-            "ygg-bench",
+            "ygg-soak",
             &[
-                "soak",
                 "--minutes",
                 "0.6",
                 "--scale",
@@ -62,16 +61,8 @@ fn ctrl_c_stops_the_soak_and_every_process_cleanly() {
     let watchdog = Watchdog::new(WATCHDOG);
     let mut soak = Proc::spawn(
         scene.command(
-            "ygg-bench",
-            &[
-                "soak",
-                "--minutes",
-                "5",
-                "--scale",
-                "0.05",
-                "--warmup-secs",
-                "2",
-            ],
+            "ygg-soak",
+            &["--minutes", "5", "--scale", "0.05", "--warmup-secs", "2"],
         ),
         "soak",
         &watchdog,
@@ -100,9 +91,9 @@ fn a_reader_role_stops_on_sigterm_while_it_waits_for_a_writer() {
     let watchdog = Watchdog::new(WATCHDOG);
     let mut role = Proc::spawn(
         scene.command(
-            "ygg-bench",
+            "ygg",
             &[
-                "role",
+                "demo-role",
                 "--scene",
                 &scene.name,
                 "--role",

@@ -74,7 +74,6 @@ pub use publisher::shm;
 pub mod service;
 pub use service::{SetupError, init_iceoryx_logging};
 mod subscriber;
-pub mod test_pattern;
 #[cfg(test)]
 mod test_prefix;
 mod wake;

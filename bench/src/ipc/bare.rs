@@ -8,6 +8,7 @@
 //! loan does), sends and notifies. The subscriber records (sequence, held, thread CPU ns spent
 //! since it last blocked) and reports them like a latency reader (`seen` lines).
 
+use super::commands::{Cmd, print_records};
 use super::{Res, thread_cpu_ns, unix_ns};
 use iceoryx2::config::Config;
 use iceoryx2::port::listener::Listener;
@@ -97,11 +98,7 @@ impl BarePublisher {
 
 /// The subscribing half: `ygg-bench ipc reader --mode bare`. Prints `ready 0` once
 /// connected, then records every sample until stdin closes; `report` prints the records.
-pub(crate) fn subscriber_main(
-    scene: &str,
-    prefix: &str,
-    commands: &Receiver<super::reader::Cmd>,
-) -> Res<()> {
+pub(crate) fn subscriber_main(scene: &str, prefix: &str, commands: &Receiver<Cmd>) -> Res<()> {
     let bare = Bare::new(scene, prefix)?;
     let data = bare
         .node
@@ -117,8 +114,8 @@ pub(crate) fn subscriber_main(
     let mut records: Vec<[u64; 3]> = Vec::with_capacity(4096);
     loop {
         match commands.try_recv() {
-            Ok(super::reader::Cmd::Report) => super::reader::print_records(&mut records)?,
-            Ok(super::reader::Cmd::Exit) | Err(TryRecvError::Disconnected) => return Ok(()),
+            Ok(Cmd::Report) => print_records(&mut records)?,
+            Ok(Cmd::Exit) | Err(TryRecvError::Disconnected) => return Ok(()),
             Ok(_) | Err(TryRecvError::Empty) => {}
         }
         let cpu_before = thread_cpu_ns();

@@ -14,6 +14,7 @@
 mod bare;
 pub(crate) mod cases;
 pub(crate) mod child;
+mod commands;
 mod reader;
 mod report;
 mod scenes;

@@ -25,15 +25,16 @@
 //!   deserializes each into an owned [`PlainGraph`] and prints `sock <seq> <done ns>
 //!   <nodes>`.
 
+use super::commands::{Cmd, read_commands};
 use super::socket::PlainGraph;
 use super::{Res, thread_cpu_ns, unix_ns};
 use crate::ladder::answer_line::{AnswerLine, mesh_checksum};
 use crate::ladder::harness::Target;
 use crate::ladder::workload::Query;
 use crate::ladder::ygg::YggTarget;
-use std::io::{BufRead, Read, Write};
+use std::io::{Read, Write};
 use std::path::PathBuf;
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, TryRecvError};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
 use std::time::{Duration, Instant};
 use ygg_dsg::layout::Layout;
 use ygg_reader::{ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
@@ -93,14 +94,6 @@ pub enum Mode {
     Bare,
 }
 
-/// Commands from the writer.
-pub(crate) enum Cmd {
-    Report,
-    Start,
-    Stop,
-    Exit,
-}
-
 /// Runs the reader process.
 pub fn main(args: &ReaderArgs) -> Res<()> {
     let started = unix_ns();
@@ -117,17 +110,6 @@ pub fn main(args: &ReaderArgs) -> Res<()> {
         Mode::Attach => attach_timed(args, started, &commands),
         Mode::Bare => super::bare::subscriber_main(&args.scene, &args.prefix, &commands),
     }
-}
-
-/// Prints and clears `records` as `seen` lines, then `end`.
-pub(crate) fn print_records(records: &mut Vec<[u64; 3]>) -> Res<()> {
-    let mut out = std::io::stdout().lock();
-    for [g, t, cpu] in records.drain(..) {
-        writeln!(out, "seen {g} {t} {t} {cpu}")?;
-    }
-    writeln!(out, "end")?;
-    out.flush()?;
-    Ok(())
 }
 
 /// Attaches, answers one query, reports the times and idles until told to exit.
@@ -149,26 +131,6 @@ fn attach_timed(args: &ReaderArgs, started: u64, commands: &Receiver<Cmd>) -> Re
             Ok(_) => {}
         }
     }
-}
-
-fn read_commands() -> Receiver<Cmd> {
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in std::io::stdin().lock().lines() {
-            let Ok(line) = line else { break };
-            let cmd = match line.trim() {
-                "report" => Cmd::Report,
-                "start" => Cmd::Start,
-                "stop" => Cmd::Stop,
-                _ => continue,
-            };
-            if tx.send(cmd).is_err() {
-                return;
-            }
-        }
-        let _ = tx.send(Cmd::Exit);
-    });
-    rx
 }
 
 fn attach(args: &ReaderArgs) -> Res<(SceneReader, SceneSnapshot)> {

@@ -1,7 +1,7 @@
 //! `ygg-bench ladder --writer-ticks N`: the writer's cost per tick of the demo's stream,
 //! in process, without the transport.
 //!
-//! The office in `mint` takes `N` ticks of [`SlamReplay`] (the stream `ygg-writer serve`
+//! The office in `mint` takes `N` ticks of [`SlamReplay`] (the stream `ygg serve`
 //! and the demo replay); after each tick every changed layer's segment is brought up to
 //! date through a [`SegmentCache`] (as [`ygg_writer::SceneWriter::publish`] does) and
 //! archived into a buffer, then the manifest. Reported: the update (the stream's

@@ -39,7 +39,7 @@ const TREE_CHUNK_BIT: u32 = 1 << 30;
 /// object in its layer. Every segment of a cut costs
 /// each reader a receive and a join per cut and a validation at attach: with a bound of
 /// 64 points the office's 213 object trees became chunks and single-layer updates and
-/// attach got slower by more than the bytes they saved (see `bench/results/issue19.md`).
+/// attach got slower by more than the bytes they saved (measured for issue 19).
 pub const TREE_CHUNK_MIN_POINTS: usize = 1024;
 
 /// Most nodes with points that a node index's sub-tree may hold for a publishing writer

@@ -1,10 +1,10 @@
-//! The synthetic segment content of `ygg-writer serve-test`, and its check.
+//! The synthetic segment content of `ygg-test-writer`, and its check.
 //!
 //! A synthetic layer segment is `YGGT`, the layer id (u32 LE), the generation (u64 LE), then
 //! one byte repeated. Readers use it to verify that a snapshot pairs every layer with the
 //! generation its manifest names. It is a transport test aid, not part of the protocol.
 
-use crate::protocol::ManifestEntry;
+use ygg_transport::protocol::ManifestEntry;
 
 /// Magic at the start of a synthetic segment.
 pub const MAGIC: &[u8; 4] = b"YGGT";

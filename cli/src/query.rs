@@ -1,4 +1,4 @@
-//! `ygg-reader query`: answers a stream of JSON-line object queries (the contract of
+//! `ygg query`: answers a stream of JSON-line object queries (the contract of
 //! [`ygg_dsg::objects`]) on a `.ygg` snapshot or on a live scene.
 //!
 //! One JSON line out per line in, in order:
@@ -22,7 +22,7 @@ use ygg_dsg::objects::{ObjectQuery, Objects};
 use ygg_reader::{SceneReader, SceneSnapshot};
 use ygg_store::{SceneView, SnapshotFile};
 
-/// Arguments of `ygg-reader query`.
+/// Arguments of `ygg query`.
 #[derive(Parser, Debug)]
 pub struct QueryArgs {
     /// The `.ygg` snapshot to query (or use --scene).
@@ -42,7 +42,7 @@ pub struct QueryArgs {
     pub timeout: f64,
 }
 
-/// Runs `ygg-reader query`.
+/// Runs `ygg query`.
 ///
 /// # Errors
 /// A message naming the snapshot, scene or query file that could not be opened or read.

@@ -1,4 +1,4 @@
-//! `ygg-reader inspect`: what a scene holds and what it costs.
+//! `ygg inspect`: what a scene holds and what it costs.
 //!
 //! * `inspect scene.ygg` and `inspect --scene NAME` (a live scene): every layer (id,
 //!   name, nodes, points, edges, nested nodes, generation, segment bytes, indexes), the
@@ -20,9 +20,9 @@ use ygg_dsg::objects::Objects;
 use ygg_store::index::SpatialIndex;
 use ygg_store::{LayerId, NodeId, SceneView, SnapshotFile};
 
-use crate::query_cli::{live_snapshot, seconds};
+use crate::query::{live_snapshot, seconds};
 
-/// Arguments of `ygg-reader inspect`.
+/// Arguments of `ygg inspect`.
 #[derive(Parser, Debug)]
 pub struct InspectArgs {
     /// A `.ygg` snapshot, or a Spark-DSG file (`.json`, `.json.gz`, `.sparkdsg`) whose
@@ -43,7 +43,7 @@ pub struct InspectArgs {
     pub timeout: f64,
 }
 
-/// Runs `ygg-reader inspect`.
+/// Runs `ygg inspect`.
 ///
 /// # Errors
 /// A message naming the file or scene that could not be read.

@@ -1,23 +1,25 @@
-//! `ygg-reader`: command-line front end of the reader.
-
-mod inspect;
-mod query_cli;
-
-use query_cli::seconds;
+//! `ygg-test-reader`: a reader at the transport level (segments and manifests, no
+//! archive validation), the counterpart of `ygg-test-writer` in the transport tests.
+//!
+//! `watch` prints a line per snapshot (`snapshot session=.. generation=.. layers=..
+//! bytes=.. manifest_bytes=.. check=..`, the check of [`ygg_testkit::test_pattern`]:
+//! `ok`, `MISMATCH(..)` or `n/a` for segments that are not synthetic), writer exits and
+//! restarts; `dump` prints the current snapshot once with each segment's first bytes.
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand};
+use ygg_testkit::test_pattern;
 use ygg_transport::{
-    ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, test_pattern,
+    ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder,
 };
 
 #[derive(Parser, Debug)]
 #[command(
-    name = "ygg-reader",
+    name = "ygg-test-reader",
     version,
-    about = "Attaches to a Yggdrasil scene in shared memory"
+    about = "Watches a scene at the transport level and checks synthetic segments (a test driver)"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -30,12 +32,6 @@ enum Command {
     Watch(Watch),
     /// Print the current snapshot once and exit.
     Dump(Dump),
-    /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
-    /// or the paper's static table of the layouts of a Spark-DSG JSON file.
-    Inspect(inspect::InspectArgs),
-    /// Answer JSON-line object queries on a `.ygg` file or a live scene (one line out per
-    /// line in).
-    Query(query_cli::QueryArgs),
 }
 
 #[derive(Parser, Debug)]
@@ -81,17 +77,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Watch(args) => watch(&args),
         Command::Dump(args) => dump(&args),
-        Command::Inspect(args) => inspect::run(&args)
-            .map(|()| ExitCode::SUCCESS)
-            .map_err(Into::into),
-        Command::Query(args) => query_cli::run(&args)
-            .map(|()| ExitCode::SUCCESS)
-            .map_err(Into::into),
     };
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("ygg-reader: error: {}", error_chain(e.as_ref()));
+            eprintln!("ygg-test-reader: error: {}", error_chain(e.as_ref()));
             ExitCode::FAILURE
         }
     }
@@ -106,6 +96,12 @@ fn error_chain(e: &dyn std::error::Error) -> String {
         source = s.source();
     }
     text
+}
+
+/// `value` seconds as a duration, for the option `name`.
+fn seconds(value: f64, name: &str) -> Result<Duration, String> {
+    Duration::try_from_secs_f64(value)
+        .map_err(|_| format!("{name} must be a non-negative number of seconds"))
 }
 
 /// Opens the reader, waiting up to `wait` for the scene to exist.
@@ -193,7 +189,7 @@ fn watch(args: &Watch) -> Result<ExitCode, Box<dyn std::error::Error>> {
                 break;
             }
             Err(e @ (ReceiveError::Corrupt { .. } | ReceiveError::BorrowLimit { .. })) => {
-                eprintln!("ygg-reader: warning: {}", error_chain(&e));
+                eprintln!("ygg-test-reader: warning: {}", error_chain(&e));
             }
             Err(e) => return Err(e.into()),
         }
@@ -234,11 +230,11 @@ fn dump(args: &Dump) -> Result<ExitCode, Box<dyn std::error::Error>> {
                 return Ok(ExitCode::SUCCESS);
             }
             Ok(None) => {
-                eprintln!("ygg-reader: no complete snapshot within {timeout:?}");
+                eprintln!("ygg-test-reader: no complete snapshot within {timeout:?}");
                 return Ok(ExitCode::from(EXIT_TIMEOUT));
             }
             Err(e @ ReceiveError::Corrupt { .. }) => {
-                eprintln!("ygg-reader: error: {}", error_chain(&e));
+                eprintln!("ygg-test-reader: error: {}", error_chain(&e));
                 return Ok(ExitCode::from(EXIT_CORRUPT));
             }
             Err(ReceiveError::WriterGone { .. }) if start.elapsed() < timeout => {}

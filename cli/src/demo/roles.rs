@@ -1,4 +1,4 @@
-//! Demo consumers (`ygg-bench role`): a planner, a visibility checker and a label
+//! Demo consumers (`ygg demo-role`): a planner, a visibility checker and a label
 //! searcher, each attached to a live scene, querying every new snapshot (the planner and
 //! the visibility checker through [`Objects`] over the current room's objects), checking
 //! a sample of its answers against brute force on the same snapshot, and printing JSON
@@ -9,13 +9,14 @@
 //! writer `session` of the snapshot queried, so a driver can see the pickup.
 
 use std::time::{Duration, Instant};
-use ygg_dsg::layout::{self, LayerRole};
+use ygg_dsg::layout::{self, AgentPose, LayerRole, RoomScope};
 use ygg_dsg::objects::{self, Objects};
 use ygg_reader::{ReaderOpenError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, ConeView};
 use ygg_store::snapshot::ArchivedScene;
 use ygg_store::{NodeId, Point, SceneView, Scope};
-use ygg_testkit::stats;
+
+use super::{child, stats};
 
 /// Which consumer to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -28,7 +29,7 @@ pub enum Role {
     Labels,
 }
 
-/// Options of `ygg-bench role`.
+/// Options of `ygg demo-role`.
 #[derive(clap::Args, Debug)]
 pub struct RoleArgs {
     /// Scene name.
@@ -58,7 +59,7 @@ const RANGE: f32 = 5.0;
 /// Runs a role until `--seconds` pass or a signal arrives.
 pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
     // Started by the demo: stop when it dies.
-    ygg_testkit::die_with_parent()?;
+    child::die_with_parent()?;
     let mut reader = match attach(&args.scene, args.wait_for_writer) {
         Err(ReaderOpenError::Terminated) => {
             // Stopped while waiting for a writer: a clean stop with nothing to report.
@@ -246,54 +247,6 @@ enum Query {
     Label(&'static str),
 }
 
-/// The newest agent pose and the one before it (the agents layer's two largest ids).
-fn newest_pose(view: &ArchivedScene<'_>) -> Option<(Point, Point)> {
-    let agents = layout::layer_with_role(view, LayerRole::Agents)?;
-    let mut ids: Vec<NodeId> = view.layer_nodes(agents).map(|n| view.node_id(n)).collect();
-    ids.sort_unstable();
-    let p = |i: NodeId| view.node(i).and_then(|n| view.points(n).first().copied());
-    let last = p(*ids.last()?)?;
-    let prev = ids.len().checked_sub(2).and_then(|i| p(ids[i])).unwrap_or([
-        last[0] - 1.0,
-        last[1],
-        last[2],
-    ]);
-    Some((last, prev))
-}
-
-/// The room whose exact box holds `p` (x and y), smallest id first.
-fn room_of(view: &ArchivedScene<'_>, p: &Point) -> Option<NodeId> {
-    let rooms = layout::layer_with_role(view, LayerRole::Rooms)?;
-    let mut found: Vec<NodeId> = view
-        .layer_nodes(rooms)
-        .filter(|&n| {
-            view.aabb(n)
-                .is_some_and(|b| (0..2).all(|a| b.min[a] <= p[a] && p[a] <= b.max[a]))
-        })
-        .map(|n| view.node_id(n))
-        .collect();
-    found.sort_unstable();
-    found.first().copied()
-}
-
-fn room_scope(view: &ArchivedScene<'_>, room: NodeId) -> Option<(ygg_store::LayerId, NodeId)> {
-    let mesh = layout::layer_with_role(view, LayerRole::ClaimedMesh { room })?;
-    let group = layout::layer_with_role(view, LayerRole::RoomGroups { room })?;
-    let claimed = view.layer_nodes(group).map(|n| view.node_id(n)).min()?;
-    Some((mesh, claimed))
-}
-
-fn owners(view: &ArchivedScene<'_>, ids: impl IntoIterator<Item = NodeId>) -> Vec<u64> {
-    let mut out: Vec<u64> = ids
-        .into_iter()
-        .filter_map(|m| query::parent(view, m))
-        .map(|p| p.0)
-        .collect();
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
 /// Runs one batch of the role's queries with the indexed APIs ([`Objects`] for the
 /// planner and the visibility checker).
 fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u64>)> {
@@ -308,12 +261,21 @@ fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u
             out.push((Query::Label(label), ids));
         }
         Role::Planner | Role::Visibility => {
-            let Some((pose, prev)) = newest_pose(view) else {
+            let Some(AgentPose {
+                position: pose,
+                previous: prev,
+                ..
+            }) = layout::newest_pose(view)
+            else {
                 return out;
             };
-            let room = room_of(view, &pose);
+            let room = layout::room_of(view, &pose);
             out.push((Query::Room(pose), room.map(|r| r.0).into_iter().collect()));
-            let Some((mesh_layer, claimed)) = room.and_then(|r| room_scope(view, r)) else {
+            let Some(RoomScope {
+                mesh_layer,
+                claimed,
+            }) = room.and_then(|r| layout::room_scope(view, r))
+            else {
                 return out;
             };
             // The room's objects answer (the claimed node holds them).
@@ -339,6 +301,7 @@ fn answer(role: Role, view: &ArchivedScene<'_>, batch: u64) -> Vec<(Query, Vec<u
                     within.into_iter().map(|n| n.0).collect(),
                 ));
             } else {
+                // A level view along the direction of travel.
                 let d = [pose[0] - prev[0], pose[1] - prev[1], 0.0];
                 let dir = if d[0] == 0.0 && d[1] == 0.0 {
                     [1.0, 0.0, 0.0]
@@ -417,7 +380,10 @@ fn owners_of_points(
         .filter(|&n| view.points(n).iter().any(&hit))
         .map(|n| view.node_id(n))
         .collect();
-    owners(view, hits)
+    layout::owners(view, hits)
+        .into_iter()
+        .map(|n| n.0)
+        .collect()
 }
 
 /// The room by recomputing each room's box from its sub-tree's points.

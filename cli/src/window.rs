@@ -1,6 +1,6 @@
-//! [`Window`]: the `--keep-*` options of `ygg-writer serve`. A sliding window over what
+//! [`Window`]: the `--keep-*` options of `ygg serve`. A sliding window over what
 //! the SLAM-like stream adds (agent poses, new objects, mesh points), so a long run
-//! serves a scene whose size stops growing: the workload of `ygg-bench soak`, where any
+//! serves a scene whose size stops growing: the workload of `ygg-soak`, where any
 //! memory that keeps growing is a leak, not the scene.
 
 use std::collections::{HashSet, VecDeque};

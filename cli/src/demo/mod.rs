@@ -1,9 +1,14 @@
-//! `ygg-bench demo`: the main job. A writer process serves the built-in office and
-//! replays a SLAM-like stream (agent poses at 30 Hz, objects moving and appearing, the
-//! mesh growing room by room); reader processes (planner, visibility checker, label
-//! searcher) query every snapshot. Live progress per process, then a summary table.
+//! `ygg demo`: the main job. A writer process (`ygg serve`) serves the built-in office
+//! and replays a SLAM-like stream (agent poses at 30 Hz, objects moving and appearing, the
+//! mesh growing room by room); reader processes (`ygg demo-role`: planner, visibility
+//! checker, label searcher) query every snapshot. Live progress per process, then a
+//! summary table. Every process is this executable, started again with another
+//! subcommand.
 
+mod child;
 pub mod roles;
+mod scene;
+mod stats;
 
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rustix::process::Signal;
@@ -11,10 +16,11 @@ use serde_json::Value;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use ygg_testkit::{Input, Proc, TestScene};
-use ygg_transport::service::ENV_IOX2_PREFIX;
 
-/// Options of `ygg-bench demo`.
+use self::child::Child;
+use self::scene::DemoScene;
+
+/// Options of `ygg demo`.
 #[derive(clap::Args, Debug)]
 pub struct DemoArgs {
     /// How long the readers run, seconds.
@@ -41,74 +47,55 @@ pub struct DemoArgs {
     pub json: Option<std::path::PathBuf>,
 }
 
-/// The reader roles (`ygg-bench role --role ...`), in the order `--readers` cycles.
-pub(crate) const ROLES: [&str; 3] = ["planner", "visibility", "labels"];
+/// The reader roles (`ygg demo-role --role ...`), in the order `--readers` cycles.
+const ROLES: [&str; 3] = ["planner", "visibility", "labels"];
 
 /// How long the writer may take to build the office and serve it.
-pub(crate) const WRITER_READY: Duration = Duration::from_secs(120);
+const WRITER_READY: Duration = Duration::from_secs(120);
 
 /// A flag that Ctrl-C (SIGINT) sets.
-pub(crate) fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
+fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))?;
     Ok(stop)
 }
 
-/// The scene of a run: a unique name and an iceoryx2 prefix of its own (so the run can
-/// tell its files from anyone else's and remove them), or the prefix a caller set in
-/// [`ENV_IOX2_PREFIX`] (tests do). First removes what killed earlier runs left.
-pub(crate) fn run_scene(tag: &str) -> TestScene {
-    let removed = ygg_testkit::remove_stale();
-    if removed > 0 {
-        eprintln!("removed {removed} files left by earlier, killed runs");
-    }
-    let mut scene = TestScene::new(tag);
-    if let Ok(prefix) = std::env::var(ENV_IOX2_PREFIX) {
-        scene.prefix = prefix;
-    }
-    scene
-}
-
-/// Starts `ygg-writer serve` on `scene`: the built-in office at `scale`, updated `rate`
-/// times a second, exiting by itself after `seconds`, with `extra` arguments.
-pub(crate) fn start_writer(
-    scene: &TestScene,
-    rate: f64,
-    scale: f64,
+/// Starts `ygg serve` (this executable) on `scene`: the built-in office at `scale`,
+/// updated `rate` times a second, exiting by itself after `seconds`, with `extra`
+/// arguments.
+fn start_writer(
+    scene: &DemoScene,
+    args: &DemoArgs,
     seconds: f64,
     extra: &[&str],
-    label: &str,
-) -> std::io::Result<Proc> {
-    let args = [
-        "serve".to_owned(),
-        "--scene".to_owned(),
-        scene.name.clone(),
-        "--seconds".to_owned(),
-        format!("{seconds}"),
-        "--rate".to_owned(),
-        format!("{rate}"),
-        "--scale".to_owned(),
-        format!("{scale}"),
+) -> std::io::Result<Child> {
+    let (seconds, rate, scale) = (
+        seconds.to_string(),
+        args.rate.to_string(),
+        args.scale.to_string(),
+    );
+    let mut all = vec![
+        "serve",
+        "--scene",
+        &scene.name,
+        "--seconds",
+        &seconds,
+        "--rate",
+        &rate,
+        "--scale",
+        &scale,
     ];
-    let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
-    args.extend_from_slice(extra);
-    let writer_bin = ygg_testkit::binary("ygg-writer");
-    Proc::start(scene.command_for(&writer_bin, &args), label, Input::Null)
+    all.extend_from_slice(extra);
+    Child::start(scene.command(&std::env::current_exe()?, &all), "writer")
 }
 
-/// Starts the reader role `role` (`ygg-bench role`, this executable) on `scene` for
-/// `seconds`, with `extra` arguments.
-pub(crate) fn start_role(
-    scene: &TestScene,
-    role: &str,
-    seconds: f64,
-    extra: &[&str],
-    label: &str,
-) -> std::io::Result<Proc> {
-    let seconds = format!("{seconds}");
-    let mut args = vec![
-        "role",
+/// Starts the reader role `role` (`ygg demo-role`, this executable) on `scene` for
+/// `seconds`.
+fn start_role(scene: &DemoScene, role: &str, seconds: f64, label: &str) -> std::io::Result<Child> {
+    let seconds = seconds.to_string();
+    let args = [
+        "demo-role",
         "--scene",
         &scene.name,
         "--role",
@@ -116,24 +103,21 @@ pub(crate) fn start_role(
         "--seconds",
         &seconds,
     ];
-    args.extend_from_slice(extra);
-    let roles_bin = std::env::current_exe()?;
-    Proc::start(scene.command_for(&roles_bin, &args), label, Input::Null)
+    Child::start(scene.command(&std::env::current_exe()?, &args), label)
 }
 
 /// Waits until `writer` prints its `ready` line and returns it parsed.
 ///
 /// # Errors
 /// When the writer exits first, `stop` is set, or it is not ready within
-/// [`WRITER_READY`]:
-/// a message with the end of its stderr.
-pub(crate) fn wait_ready(writer: &mut Proc, stop: &AtomicBool) -> Result<Value, String> {
+/// [`WRITER_READY`]: a message with the end of its stderr.
+fn wait_ready(writer: &mut Child, stop: &AtomicBool) -> Result<Value, String> {
     let until = Instant::now() + WRITER_READY;
     loop {
-        let seen = writer.wait_line_after(0, Duration::from_millis(100), |l| {
-            l.contains("\"event\":\"ready\"")
-        });
-        if let Some(v) = seen.and_then(|(_, l)| serde_json::from_str(&l).ok()) {
+        let seen = writer
+            .next_line(Duration::from_millis(100))
+            .filter(|l| l.contains("\"event\":\"ready\""));
+        if let Some(v) = seen.and_then(|l| serde_json::from_str(&l).ok()) {
             return Ok(v);
         }
         let why = if stop.load(Ordering::SeqCst) {
@@ -148,21 +132,15 @@ pub(crate) fn wait_ready(writer: &mut Proc, stop: &AtomicBool) -> Result<Value, 
         return Err(format!(
             "{} did not start ({why}):\n{}",
             writer.label(),
-            stderr_tail(writer)
+            writer.stderr_tail()
         ));
     }
-}
-
-/// The end of a process's stderr, for an error message.
-pub(crate) fn stderr_tail(proc: &Proc) -> String {
-    let lines = proc.stderr();
-    lines[lines.len().saturating_sub(20)..].join("\n")
 }
 
 /// A process of the demo: its name, progress bar and summary line.
 struct Member {
     name: String,
-    proc: Proc,
+    proc: Child,
     bar: ProgressBar,
     summary: Option<Value>,
 }
@@ -191,7 +169,11 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         return Err("--readers must be between 1 and 16".into());
     }
     let stop = stop_on_ctrl_c()?;
-    let scene = run_scene("demo");
+    let removed = scene::remove_stale();
+    if removed > 0 {
+        eprintln!("removed {removed} files left by earlier, killed runs");
+    }
+    let scene = DemoScene::new("demo");
     let multi = MultiProgress::new();
     let style = ProgressStyle::with_template("{prefix:>12} [{elapsed_precise}] {bar:30} {msg}")?;
     let bar = |name: &str| {
@@ -209,11 +191,9 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
     let chunk_len = args.point_chunk_len.to_string();
     let writer = start_writer(
         &scene,
-        args.rate,
-        args.scale,
+        args,
         args.seconds + 30.0,
         &["--point-chunk-len", &chunk_len],
-        "writer",
     )?;
     let mut procs = vec![Member {
         name: "writer".into(),
@@ -223,17 +203,20 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
     }];
     procs[0].bar.set_message("building the office...");
 
-    if let Err(why) = wait_ready(&mut procs[0].proc, &stop) {
-        drop(procs);
-        scene.clean_up();
-        return Err(why.into());
+    match wait_ready(&mut procs[0].proc, &stop) {
+        Ok(ready) => handle(&mut procs[0], &ready),
+        Err(why) => {
+            drop(procs);
+            scene.clean_up();
+            return Err(why.into());
+        }
     }
     procs[0].poll();
     let start = Instant::now();
     for i in 0..args.readers {
         let role = ROLES[i % ROLES.len()];
         let name = format!("{role}-{i}");
-        let proc = start_role(&scene, role, args.seconds, &[], &name)?;
+        let proc = start_role(&scene, role, args.seconds, &name)?;
         procs.push(Member {
             bar: bar(&name),
             name,
@@ -280,7 +263,7 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         .iter_mut()
         .filter_map(|p| {
             let ok = p.summary.is_some() && p.proc.try_status().is_some_and(|s| s.success());
-            (!ok).then(|| format!("{}:\n{}", p.name, stderr_tail(&p.proc)))
+            (!ok).then(|| format!("{}:\n{}", p.name, p.proc.stderr_tail()))
         })
         .collect();
     let (checked, matched) = checks(&procs);
@@ -412,7 +395,7 @@ fn summary_json(procs: &[Member], args: &DemoArgs) -> Value {
             "scale": args.scale,
             "rate": args.rate,
         },
-        "machine": crate::ladder::report::machine(),
+        "machine": machine(),
     })
 }
 
@@ -425,4 +408,21 @@ fn checks(procs: &[Member]) -> (u64, u64) {
             .sum()
     };
     (sum("checked"), sum("matched"))
+}
+
+/// The machine the run took place on (CPU model, cores, load average, OS).
+fn machine() -> Value {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    serde_json::json!({"cpu": cpu, "cores": cores,
+        "loadavg": load.split_whitespace().take(3).collect::<Vec<_>>().join(" "),
+        "os": std::env::consts::OS})
 }

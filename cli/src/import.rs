@@ -1,4 +1,4 @@
-//! `ygg-writer import`: a Spark-DSG file (JSON or binary `.sparkdsg`, plain or gzip) to a
+//! `ygg import`: a Spark-DSG file (JSON or binary `.sparkdsg`, plain or gzip) to a
 //! `.ygg` snapshot in one of the paper's layouts, with a progress bar.
 //!
 //! Phases: read (file bytes), decompress (gzip only; decompressed bytes), parse (a
@@ -22,7 +22,7 @@ use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::{ImportOptions, ImportPhase, ImportProgress};
 use ygg_store::{SceneGraph, SceneView};
 
-/// Arguments of `ygg-writer import`.
+/// Arguments of `ygg import`.
 #[derive(Parser, Debug)]
 pub struct ImportArgs {
     /// Spark-DSG file: JSON (`.json`, or gzip-compressed `.json.gz`) or binary
@@ -55,7 +55,7 @@ struct Timings {
     save: Duration,
 }
 
-/// Runs `ygg-writer import`: prints a one-line summary on success.
+/// Runs `ygg import`: prints a one-line summary on success.
 ///
 /// # Errors
 /// A message naming the file (and node and field for malformed content).

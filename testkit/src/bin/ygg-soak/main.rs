@@ -1,7 +1,8 @@
-//! `ygg-bench soak`: the demo's writer and reader roles run for minutes under churn,
-//! checking that no answer goes wrong and that nothing leaks.
+//! `ygg-soak`: the demo's writer and reader roles run for minutes under churn,
+//! checking that no answer goes wrong and that nothing leaks
+//! (`cargo run --release -p ygg-testkit --bin ygg-soak -- --minutes 30`).
 //!
-//! * A writer (`ygg-writer serve --rate 30`, started as the demo starts it) serves the
+//! * A writer (`ygg serve --rate 30`, started as the demo starts it) serves the
 //!   built-in office with its SLAM-like stream, keeping a sliding window of what the
 //!   stream adds ([`WINDOW`]) so that the scene's size stops growing after a few seconds
 //!   and memory that keeps growing is a leak. It is SIGKILLed at [`KILL_AT`] of the run
@@ -13,7 +14,7 @@
 //!   reader processes (roles drawn at random) attach, detach when their own time is up or
 //!   on SIGTERM, get SIGKILLed, and are started again, all drawn from `--seed`.
 //! * Every reader checks sampled answers against brute force on the same snapshot
-//!   (`ygg-bench role`); one wrong answer fails the run.
+//!   (`ygg demo-role`); one wrong answer fails the run.
 //! * Usage is sampled in like states (one writer after its warm-up, the long-lived reader,
 //!   no other reader: the churning ones are stopped first): at the start (the first
 //!   writer), when the final writer has warmed up, and at the end. The run fails when the
@@ -32,9 +33,11 @@
 //! deadline, each child has a time limit of its own (`--seconds`), the readers die with
 //! this process, and every child still running is killed when its [`Proc`] is dropped.
 
+mod launch;
 mod usage;
 
-use crate::demo::{self, ROLES, stderr_tail};
+use clap::Parser;
+use launch::{ROLES, stderr_tail};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rustix::process::Signal;
@@ -47,9 +50,14 @@ use std::time::{Duration, Instant};
 use usage::{Usage, growth_pct, shm_files};
 use ygg_testkit::{Proc, TestScene};
 
-/// Options of `ygg-bench soak`.
-#[derive(clap::Args, Debug)]
-pub struct SoakArgs {
+/// Options of `ygg-soak`.
+#[derive(Parser, Debug)]
+#[command(
+    name = "ygg-soak",
+    version,
+    about = "Soak: the office stream for minutes while readers attach, detach, get killed and restart and the writer is restarted twice; fails on a wrong answer or on growth of memory, descriptors or /dev/shm files"
+)]
+struct SoakArgs {
     /// How long to run, minutes.
     #[arg(long, default_value_t = 30.0)]
     pub minutes: f64,
@@ -111,12 +119,22 @@ const CHURN_LIFETIME: std::ops::Range<f64> = 3.0..20.0;
 /// Seconds between two churn actions.
 const CHURN_PAUSE: std::ops::Range<f64> = 0.5..3.0;
 
+fn main() -> std::process::ExitCode {
+    match run(&SoakArgs::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("ygg-soak: error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 /// Runs the soak.
 ///
 /// # Errors
 /// When a check failed (after the summary line), when interrupted, or when the run could
 /// not start.
-pub fn run(args: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
+fn run(args: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
     if !(args.minutes.is_finite() && args.minutes > 0.0) {
         return Err("--minutes must be a positive number".into());
     }
@@ -129,8 +147,8 @@ pub fn run(args: &SoakArgs) -> Result<(), Box<dyn std::error::Error>> {
     if !(args.warmup_secs.is_finite() && args.warmup_secs >= 0.0) {
         return Err("--warmup-secs must be a non-negative number".into());
     }
-    let stop = demo::stop_on_ctrl_c()?;
-    let scene = demo::run_scene("soak");
+    let stop = launch::stop_on_ctrl_c()?;
+    let scene = TestScene::for_run("soak");
     let mut soak = Soak::new(args, scene, stop);
     let started = Instant::now();
     let outcome = soak.run();
@@ -294,7 +312,7 @@ impl<'a> Soak<'a> {
             .run
             .saturating_sub(self.t0.map_or(Duration::ZERO, |t| t.elapsed()));
         let limit = (left + Duration::from_secs(300)).as_secs_f64();
-        let proc = demo::start_writer(
+        let proc = launch::start_writer(
             &self.scene,
             self.args.rate,
             self.args.scale,
@@ -314,7 +332,7 @@ impl<'a> Soak<'a> {
     }
 
     fn start_reader(&mut self, role: &str, seconds: f64, label: &str) -> Result<Reader, String> {
-        let proc = demo::start_role(
+        let proc = launch::start_role(
             &self.scene,
             role,
             seconds,
@@ -330,7 +348,7 @@ impl<'a> Soak<'a> {
     fn run(&mut self) -> Result<(), String> {
         self.start_writer()?;
         let writer = self.writer.as_mut().ok_or("no writer")?;
-        let ready = demo::wait_ready(&mut writer.proc, &self.stop)?;
+        let ready = launch::wait_ready(&mut writer.proc, &self.stop)?;
         let t0 = Instant::now();
         self.t0 = Some(t0);
         let kill_after = self
@@ -461,11 +479,11 @@ impl<'a> Soak<'a> {
                     w.proc.label(),
                     stderr_tail(&w.proc)
                 ));
-            } else if w.ready.is_none() && w.started.elapsed() > demo::WRITER_READY {
+            } else if w.ready.is_none() && w.started.elapsed() > launch::WRITER_READY {
                 self.fatal(format!(
                     "{} was not ready within {:?}:\n{}",
                     w.proc.label(),
-                    demo::WRITER_READY,
+                    launch::WRITER_READY,
                     stderr_tail(&w.proc)
                 ));
             }

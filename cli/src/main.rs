@@ -1,0 +1,129 @@
+//! `ygg`: Yggdrasil's one command for users, in the idiom of cargo and git (`ygg <command>
+//! [options]`, `ygg help <command>`). The libraries stay free of it: `ygg-writer` and
+//! `ygg-reader` link only the store and the transport, and everything a command line needs
+//! (clap, progress bars, Spark-DSG, ZeroMQ and its async runtime) lives here.
+//!
+//! | command | what it does | module |
+//! |---|---|---|
+//! | `ygg demo` | the main job: a writer serving the built-in office with a live update stream, and reader processes querying it (planner, visibility, labels), checked against brute force | [`demo`] |
+//! | `ygg serve` | serve a scene (a `.ygg` file or the built-in office), optionally with a SLAM-like update stream | [`serve`] |
+//! | `ygg import` | a Spark-DSG file (JSON or binary) to a `.ygg` snapshot in one of the paper's layouts | [`import`] |
+//! | `ygg export` | a live scene's current snapshot to a `.ygg` file | [`export`] |
+//! | `ygg inspect` | a scene's layers, DAG, counts, indexes and memory; the layouts' static table of a Spark-DSG file | [`inspect`] |
+//! | `ygg query` | JSON-line object queries on a `.ygg` file or a live scene | [`query`] |
+//! | `ygg watch` | follow a live scene: a line per validated snapshot, writer exits and restarts | [`watch`] |
+//! | `ygg bridge zmq` | follow a Spark-DSG ZeroMQ stream (Hydra) and publish what changes | [`bridge`] |
+//!
+//! `ygg demo-role` (hidden) is one of the demo's reader processes; the demo starts it, as
+//! it starts `ygg serve`, from this same executable.
+//!
+//! Not here: the Zenoh relay stays its own binary, `ygg-relay` (crate `relay/`), so that
+//! Zenoh's build (hundreds of crates) stays out of `ygg` and of every other crate;
+//! `.ci/check-deps` keeps zenoh to `ygg-relay`. Test drivers (`ygg-test-writer`,
+//! `ygg-test-reader`, `ygg-soak`) live in `ygg-testkit`, benchmarks in `ygg-bench`.
+
+mod bridge;
+mod demo;
+mod export;
+mod import;
+mod inspect;
+mod query;
+mod serve;
+mod watch;
+mod window;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "ygg",
+    version,
+    about = "Yggdrasil: a layered 3D scene graph in shared memory, for robots"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// The main job: a writer process serving the built-in office with a live update
+    /// stream, and reader processes querying it (planner, visibility, labels).
+    Demo(demo::DemoArgs),
+    /// One of the demo's reader processes (planner, visibility, labels) on a live scene,
+    /// printing JSON progress and a summary line.
+    #[command(hide = true)]
+    DemoRole(demo::roles::RoleArgs),
+    /// Serve a scene (a `.ygg` file or the built-in office) under a scene name, and
+    /// optionally replay a SLAM-like stream of updates at a given rate.
+    ///
+    /// Prints a `{"event":"ready",...}` line naming the writer session once the scene is
+    /// published, one JSON line per second (`{"event":"progress",...}`) and a final
+    /// `{"event":"summary",...}` line. Exits cleanly, removing its shared memory, on
+    /// SIGINT/SIGTERM or after --seconds.
+    Serve(serve::ServeArgs),
+    /// Import a Spark-DSG file (JSON, .json.gz or binary) into a `.ygg` snapshot in one
+    /// of the paper's layouts, with a progress bar.
+    Import(import::ImportArgs),
+    /// Write the current snapshot of a live scene to a `.ygg` file.
+    Export(export::ExportArgs),
+    /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
+    /// or the paper's static table of the layouts of a Spark-DSG JSON file.
+    Inspect(inspect::InspectArgs),
+    /// Answer JSON-line object queries on a `.ygg` file or a live scene (one line out per
+    /// line in).
+    Query(query::QueryArgs),
+    /// Print every validated snapshot of a live scene as it arrives, and writer exits
+    /// and restarts.
+    Watch(watch::WatchArgs),
+    /// Bridge another system's scene-graph stream into a scene (`ygg bridge zmq`).
+    #[command(subcommand)]
+    Bridge(bridge::BridgeCommand),
+}
+
+fn main() -> ExitCode {
+    ygg_transport::init_iceoryx_logging();
+    let cli = Cli::parse();
+    // A process may attach to many scenes (about 40 descriptors each); do not stop at a soft limit of 1024.
+    let _ = ygg_transport::limits::raise_open_file_limit();
+    let result: Result<ExitCode, Box<dyn std::error::Error>> = match cli.command {
+        Command::Demo(args) => demo::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::DemoRole(args) => demo::roles::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Serve(args) => serve::run(&args).map(|()| ExitCode::SUCCESS),
+        Command::Import(args) => import::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Export(args) => export::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Inspect(args) => inspect::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Query(args) => query::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Watch(args) => watch::run(&args),
+        Command::Bridge(command) => bridge::run(&command).map(|()| ExitCode::SUCCESS),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("ygg: error: {}", error_chain(e.as_ref()));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `e` and each of its sources, joined by `": "`.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}
