@@ -223,17 +223,16 @@ mod dsg {
     }
 
     /// Counts of the full office; prints read+gunzip and parse times (not asserted).
-    /// Skips with a note when `office_seed7.json.gz` is absent.
+    /// The 12.9 MB file is not in the repository: run with `--ignored` where it is.
     #[test]
+    #[ignore = "needs office_seed7.json.gz (12.9 MB) from $YGG_DSG_DATA or /work/shared/data"]
     fn full_office_imports_with_paper_counts() {
         let path = data_dir().join("office_seed7.json.gz");
-        if !path.exists() {
-            eprintln!(
-                "note: {} not found, skipping the full-office import test",
-                path.display()
-            );
-            return;
-        }
+        assert!(
+            path.exists(),
+            "{} is missing: set YGG_DSG_DATA to the directory holding office_seed7.json.gz",
+            path.display()
+        );
         let t = Instant::now();
         let g = ygg_dsg::read_file(&path).unwrap_or_else(|e| panic!("{e}"));
         let first = t.elapsed();

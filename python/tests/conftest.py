@@ -25,7 +25,7 @@ def binary(name):
         p = pathlib.Path(d) / name
         if p.exists():
             return str(p)
-    pytest.skip(f"{name} is not built (cargo build -p ygg-cli)")
+    pytest.fail(f"{name} is not built (cargo build -p ygg-cli)")
 
 
 @pytest.fixture(scope="session")
@@ -70,6 +70,7 @@ def scene_name(monkeypatch):
     gc.collect()
     deadline = time.monotonic() + 5
     left = [f for f in _files_of(prefix) if not f.endswith(".global_mgmt")]
+    # A bounded poll: no event says that another process removed its files.
     while left and time.monotonic() < deadline:
         time.sleep(0.05)
         gc.collect()

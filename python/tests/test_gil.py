@@ -12,8 +12,10 @@ class Counter(threading.Thread):
         super().__init__(daemon=True)
         self.count = 0
         self.stop = False
+        self.running = threading.Event()
 
     def run(self):
+        self.running.set()
         while not self.stop:
             self.count += 1
 
@@ -21,7 +23,7 @@ class Counter(threading.Thread):
 def progress_during(fn):
     c = Counter()
     c.start()
-    time.sleep(0.05)
+    assert c.running.wait(10), "the counter thread did not start"
     before = c.count
     t0 = time.perf_counter()
     fn()

@@ -48,7 +48,7 @@ def test_rust_reader_follows_a_python_writer(scene_name, procs):
         step = 0
         while time.monotonic() < deadline:
             step += 1
-            time.sleep(0.05)
+            time.sleep(0.05)  # pacing: a 20 Hz writer; the loop ends on the watch's exit
             graph.set_geometry(mesh, np.full((3, 3), 0.01 * step, dtype=np.float32))
             report = writer.publish()
             assert report["layers_sent"] >= 1 and report["layers_unchanged"] >= 1

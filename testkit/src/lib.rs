@@ -9,6 +9,7 @@
 //!   carry commands); it is killed and reaped when dropped and when the test's
 //!   [`Watchdog`] fires. A child that links this crate calls [`die_with_parent`] to get
 //!   SIGTERM when its parent dies.
+//! * [`wait_until`] polls, with a deadline, a condition that has no event to wait on.
 //! * [`stats`] is the one median / p99 (nearest rank) everything reports.
 //! * [`fingerprint`] gives canonical forms of archived segments, to compare incremental
 //!   builds with fresh ones.
@@ -23,6 +24,7 @@
 
 mod binary;
 pub mod fingerprint;
+mod poll;
 mod proc;
 mod scene;
 pub mod stats;
@@ -31,7 +33,10 @@ mod veth;
 mod watchdog;
 
 pub use binary::{ENV_BIN_DIR, binary, example, run, text};
-pub use proc::{DROP_GRACE, ENV_PARENT_PID, Input, LineError, Proc, die_with_parent, field};
+pub use poll::{POLL_INTERVAL, poll_until, wait_until};
+pub use proc::{
+    DROP_GRACE, ENV_PARENT_PID, Input, LineError, Proc, catches_signal, die_with_parent, field,
+};
 pub use scene::{PREFIX_TAG, SHM_DIR, TestScene, remove_stale};
-pub use veth::VethLink;
+pub use veth::{ENV_SKIP_NETNS_TESTS, VethLink};
 pub use watchdog::Watchdog;

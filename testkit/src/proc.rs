@@ -1,16 +1,19 @@
 //! [`Proc`]: a child process with line-based stdout (and optional stdin control), killed
 //! and reaped when dropped, and dying with its parent when it asks to
-//! ([`die_with_parent`]).
+//! ([`die_with_parent`]); what `/proc` tells about a process ([`catches_signal`],
+//! [`Proc::children`]).
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
+use std::os::fd::OwnedFd;
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
-use rustix::process::{Pid, Signal, kill_process};
+use rustix::event::{PollFd, PollFlags, Timespec, poll};
+use rustix::process::{Pid, PidfdFlags, Signal, kill_process, pidfd_open};
 
-use crate::Watchdog;
+use crate::{POLL_INTERVAL, Watchdog};
 
 /// Env var [`Proc::start`] sets to the parent's pid, for [`die_with_parent`] (and for
 /// `ygg demo-role`, which reads the same variable).
@@ -102,6 +105,8 @@ pub struct Proc {
     stdin: Option<ChildStdin>,
     piped: bool,
     status: Option<ExitStatus>,
+    /// A pidfd on the child: polls readable once it exited (`None` before Linux 5.3).
+    exit_fd: Option<OwnedFd>,
     output: Shared,
     /// Stdout lines consumed by [`Proc::next_line`] and [`Proc::new_lines`].
     cursor: usize,
@@ -142,12 +147,18 @@ impl Proc {
             collect_lines(stderr, Arc::clone(&output), true);
         }
         let stdin = child.stdin.take();
+        // The child is not reaped before `Proc` is dropped, so its pid cannot be reused.
+        let exit_fd = i32::try_from(child.id())
+            .ok()
+            .and_then(Pid::from_raw)
+            .and_then(|pid| pidfd_open(pid, PidfdFlags::empty()).ok());
         Ok(Self {
             label,
             child,
             piped: stdin.is_some(),
             stdin,
             status: None,
+            exit_fd,
             output,
             cursor: 0,
         })
@@ -212,7 +223,8 @@ impl Proc {
     }
 
     /// Waits until a stdout line after the first `skip` lines satisfies `pred`; returns it
-    /// with its index.
+    /// with its index. `None` after `timeout`, or as soon as stdout closed (the process
+    /// exited) with no such line.
     pub fn wait_line_after(
         &self,
         skip: usize,
@@ -232,6 +244,9 @@ impl Proc {
             {
                 return Some((i, line.clone()));
             }
+            if output.stdout_closed {
+                return None;
+            }
             let remaining = timeout.checked_sub(start.elapsed())?;
             output = cvar
                 .wait_timeout(output, remaining)
@@ -249,7 +264,7 @@ impl Proc {
         match self.wait_line_after(0, timeout, pred) {
             Some((_, line)) => line,
             None => panic!(
-                "{}: expected line not seen within {timeout:?}",
+                "{}: expected line not seen within {timeout:?} (or before stdout closed)",
                 self.describe()
             ),
         }
@@ -311,16 +326,41 @@ impl Proc {
     /// Waits up to `timeout` for the process to exit; its status, or `None` if it still
     /// runs.
     pub fn wait_timeout(&mut self, timeout: Duration) -> Option<ExitStatus> {
-        let start = Instant::now();
+        let deadline = Instant::now() + timeout;
         loop {
             if let Some(status) = self.try_status() {
                 return Some(status);
             }
-            if start.elapsed() >= timeout {
-                return None;
-            }
-            std::thread::sleep(Duration::from_millis(5));
+            let remaining = deadline
+                .checked_duration_since(Instant::now())
+                .filter(|d| !d.is_zero())?;
+            self.block_until_exit(remaining);
         }
+    }
+
+    /// Blocks until the process exits or `timeout` passes: on its pidfd, or (where the
+    /// kernel has none) for one [`POLL_INTERVAL`] of a bounded poll.
+    fn block_until_exit(&self, timeout: Duration) {
+        match &self.exit_fd {
+            Some(fd) => {
+                let mut fds = [PollFd::new(fd, PollFlags::IN)];
+                let timeout = Timespec::try_from(timeout).ok();
+                // An error (EINTR) just means "check again".
+                let _ = poll(&mut fds, timeout.as_ref());
+            }
+            None => std::thread::sleep(POLL_INTERVAL.min(timeout)),
+        }
+    }
+
+    /// Whether the process has a handler for `signal` installed (see [`catches_signal`]).
+    pub fn catches(&self, signal: Signal) -> bool {
+        catches_signal(self.pid(), signal)
+    }
+
+    /// The pids of the process's own children (its grandchildren are theirs), read from
+    /// `/proc`.
+    pub fn children(&self) -> Vec<u32> {
+        child_pids(self.pid())
     }
 
     /// Waits for the process to exit.
@@ -423,4 +463,82 @@ fn collect_lines(stream: impl Read + Send + 'static, output: Shared, is_stderr: 
 pub fn field<'a>(line: &'a str, key: &str) -> Option<&'a str> {
     line.split_whitespace()
         .find_map(|part| part.strip_prefix(key)?.strip_prefix('='))
+}
+
+/// Whether process `pid` has a handler installed for `signal` (the `SigCgt` mask of
+/// `/proc/<pid>/status`): a process that catches SIGINT or SIGTERM can stop cleanly, one
+/// that does not yet dies of it. `false` when the process is gone.
+pub fn catches_signal(pid: u32, signal: Signal) -> bool {
+    let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
+        return false;
+    };
+    let caught = status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigCgt:"))
+        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .unwrap_or(0);
+    let bit = signal.as_raw() - 1;
+    (0..64).contains(&bit) && caught & (1 << bit) != 0
+}
+
+/// The pids of the processes whose parent is `pid` (the `ppid` field of every
+/// `/proc/<pid>/stat`).
+fn child_pids(pid: u32) -> Vec<u32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|&child| {
+            std::fs::read_to_string(format!("/proc/{child}/stat")).is_ok_and(|stat| {
+                // `pid (comm) state ppid ...`; comm may hold spaces and parentheses.
+                stat.rsplit_once(')')
+                    .and_then(|(_, rest)| rest.split_whitespace().nth(1)?.parse::<u32>().ok())
+                    == Some(pid)
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_never_printed_is_given_up_on_when_stdout_closes_and_the_exit_is_seen() {
+        let watchdog = Watchdog::new(Duration::from_secs(60));
+        let mut command = Command::new("sh");
+        command.args(["-c", "echo a; exit 3"]);
+        let mut shell = Proc::spawn(command, "sh", &watchdog);
+        let start = Instant::now();
+        assert_eq!(
+            shell.wait_line_after(0, Duration::from_secs(50), |l| l == "b"),
+            None
+        );
+        assert!(start.elapsed() < Duration::from_secs(50), "waited it out");
+        assert_eq!(shell.wait_exit(Duration::from_secs(50)).code(), Some(3));
+        assert_eq!(shell.stdout(), ["a"]);
+    }
+
+    #[test]
+    fn a_shell_trapping_term_is_seen_catching_it_and_its_sleep_as_its_child() {
+        let watchdog = Watchdog::new(Duration::from_secs(60));
+        let mut command = Command::new("sh");
+        // `trap` installs the handler before `ready` is printed; `sleep` is a child.
+        command.args(["-c", "trap 'exit 0' TERM; echo ready; sleep 60 & wait"]);
+        let mut shell = Proc::spawn(command, "sh", &watchdog);
+        shell.expect_line(Duration::from_secs(30), |l| l == "ready");
+        assert!(shell.catches(Signal::TERM));
+        assert!(!shell.catches(Signal::USR2));
+        crate::wait_until(Duration::from_secs(30), "sh started sleep", || {
+            !shell.children().is_empty()
+        });
+        let sleep = shell.children();
+        assert_eq!(sleep.len(), 1, "{sleep:?}");
+        assert!(!catches_signal(sleep[0], Signal::TERM));
+        shell.signal(Signal::TERM);
+        assert!(shell.wait_exit(Duration::from_secs(30)).success());
+        send(sleep[0], Signal::KILL);
+    }
 }

@@ -6,11 +6,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use ygg_transport::service::ENV_IOX2_PREFIX;
+use ygg_transport::service::{ENV_IOX2_PREFIX, ICEORYX2_ROOT};
 
-use crate::{Proc, Watchdog, binary};
+use crate::{Proc, Watchdog, binary, poll_until};
 
 /// The POSIX shared-memory directory.
 pub const SHM_DIR: &str = "/dev/shm";
@@ -115,18 +115,33 @@ impl TestScene {
     ///
     /// If files remain after `grace`.
     pub fn assert_no_leftovers(&self, grace: Duration) {
-        let start = Instant::now();
-        let mut left = self.leftovers();
-        while !left.is_empty() && start.elapsed() < grace {
-            std::thread::sleep(Duration::from_millis(20));
-            left = self.leftovers();
+        // No event tells when another process removed its files: poll them.
+        if poll_until(grace, || self.leftovers().is_empty()).is_none() {
+            panic!(
+                "scene {} left files behind: {:#?}",
+                self.name,
+                self.leftovers()
+            );
         }
-        assert!(
-            left.is_empty(),
-            "scene {} left files behind: {left:#?}",
-            self.name
-        );
         self.remove_all();
+    }
+
+    /// How many iceoryx2 nodes of this scene's prefix exist: each process (or in-process
+    /// reader or writer) has one, from its creation until it is dropped or, after a
+    /// crash, until another process removes its resources.
+    pub fn node_count(&self) -> usize {
+        let nodes = Path::new(ICEORYX2_ROOT).join("nodes");
+        let Ok(entries) = std::fs::read_dir(nodes) else {
+            return 0;
+        };
+        entries
+            .flatten()
+            .filter(|node| {
+                let mut found = Vec::new();
+                collect(&node.path(), &|n| n.starts_with(&self.prefix), &mut found);
+                !found.is_empty()
+            })
+            .count()
     }
 
     /// Once every process of the scene has exited: removes every file of the prefix and

@@ -175,17 +175,24 @@ fn bridge_follows_a_spark_dsg_sender_and_republishes_only_the_layers_touched() {
         &watchdog,
     );
     bridge.expect_line(STEP, |l| l.contains("\"connected\""));
-    // PUB drops what it sends before the subscription arrives: resend until served.
+    // PUB drops what it sends before the subscription arrives (and nothing tells the
+    // sender when it did): resend until the bridge says it serves the graph.
     let first = dir.path().join("0.bin");
     let until = Instant::now() + STEP;
-    while bridge.count_lines(|l| l.contains("\"ready\"")) == 0 {
+    loop {
         assert!(
             Instant::now() < until,
             "bridge never ready: {}",
             bridge.describe()
         );
         command(&mut sender, &format!("send {}", first.display()));
-        std::thread::sleep(Duration::from_millis(200));
+        let resend = Duration::from_millis(200);
+        if bridge
+            .wait_line_after(0, resend, |l| l.contains("\"ready\""))
+            .is_some()
+        {
+            break;
+        }
     }
     let mut reader = SceneReader::builder(&scene.name)
         .iceoryx_prefix(&scene.prefix)

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::{NodeBuilder, ServiceName};
 use rustix::process::Signal;
-use ygg_testkit::{TestScene, Watchdog, field, test_pattern};
+use ygg_testkit::{TestScene, Watchdog, field, test_pattern, wait_until};
 use ygg_transport::protocol::{
     self, BLOCK_SIZE, Block128, EVENT_SNAPSHOT_PUBLISHED, MANIFEST_LAYER_ID, MANIFEST_MAGIC,
     ManifestEntry, SegmentError, SegmentHeader, SegmentKind,
@@ -241,8 +241,12 @@ fn a_sigkilled_reader_does_not_stop_the_writer() {
     let mut reader = open_reader(&scene);
     assert_synthetic(&next_snapshot(&mut reader));
     drop(reader);
-    // Give the writer's helper a cleanup round for the dead reader's resources.
-    std::thread::sleep(Duration::from_millis(1500));
+    // The killed reader's node is removed while the writer runs (by its helper, which
+    // watches the reader's process, or by the reader opened since): only the writer's
+    // node is left.
+    wait_until(STEP, "only the writer's iceoryx2 node is left", || {
+        scene.node_count() == 1
+    });
     writer.signal(Signal::INT);
     assert!(writer.wait_exit(STEP).success(), "{:?}", writer.stderr());
     scene.assert_no_leftovers(STEP);
@@ -267,15 +271,12 @@ fn a_sigkilled_readers_slot_is_freed_at_once() {
         .expect_err("the one reader slot is taken");
     victim.signal(Signal::KILL);
     let _ = victim.wait_exit(STEP);
-    let killed = Instant::now();
-    let reader = loop {
-        match subscriber(&scene).open() {
-            Ok(reader) => break reader,
-            Err(e) if killed.elapsed() > STEP => panic!("the slot was never freed: {e}"),
-            Err(_) => std::thread::sleep(Duration::from_millis(10)),
-        }
-    };
-    let freed = killed.elapsed();
+    // No event says the slot is free: try to take it until it is.
+    let mut reader = None;
+    let freed = wait_until(STEP, "the killed reader's slot is freed", || {
+        reader = subscriber(&scene).open().ok();
+        reader.is_some()
+    });
     // About 50 ms here; iceoryx2's periodic check alone would take up to an hour.
     assert!(
         freed < Duration::from_millis(500),
@@ -790,11 +791,10 @@ fn garbage_segments_are_reported_not_crashed_on() {
     let start = Instant::now();
     let status = loop {
         fake.pump();
-        if let Some(status) = dump.try_status() {
+        if let Some(status) = dump.wait_timeout(Duration::from_millis(20)) {
             break status;
         }
         assert!(start.elapsed() < STEP, "dump did not finish");
-        std::thread::sleep(Duration::from_millis(20));
     };
     let stderr = dump.stderr().join("\n");
     assert_eq!(

@@ -12,7 +12,7 @@ use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
 use ygg_store::snapshot::is_chunk_segment_id;
 use ygg_store::{LayerId, NodeId, SceneGraph, SceneView, Scope};
-use ygg_testkit::{Proc, TestScene, Watchdog};
+use ygg_testkit::{Proc, TestScene, Watchdog, catches_signal, wait_until};
 use ygg_transport::PublisherBuilder;
 
 const STEP: Duration = Duration::from_secs(60);
@@ -306,8 +306,16 @@ fn demo_stopped_by_ctrl_c_exits_cleanly_and_leaves_no_shared_memory() {
         &watchdog,
     );
     demo.expect_line(STEP, |l| l.starts_with("Yggdrasil demo"));
-    // Let the writer and readers come up, then press Ctrl-C.
-    std::thread::sleep(Duration::from_secs(4));
+    // Press Ctrl-C once the writer and both readers run and handle it (a process that
+    // does not handle SIGINT yet would die of the demo passing it on, not stop).
+    wait_until(
+        STEP,
+        "the demo's writer and 2 readers handle SIGINT",
+        || {
+            let children = demo.children();
+            children.len() == 3 && children.iter().all(|&pid| catches_signal(pid, Signal::INT))
+        },
+    );
     demo.signal(Signal::INT);
     let status = demo.wait_exit(STEP);
     let out = demo.stdout().join("\n");

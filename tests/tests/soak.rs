@@ -6,7 +6,7 @@
 use std::time::Duration;
 
 use rustix::process::Signal;
-use ygg_testkit::{Proc, TestScene, Watchdog};
+use ygg_testkit::{Proc, TestScene, Watchdog, catches_signal, wait_until};
 
 const STEP: Duration = Duration::from_secs(120);
 const WATCHDOG: Duration = Duration::from_secs(240);
@@ -68,9 +68,17 @@ fn ctrl_c_stops_the_soak_and_every_process_cleanly() {
         &watchdog,
     );
     soak.expect_line(STEP, |l| l.contains("\"event\":\"start\""));
-    // The long-lived reader attaches and the churn begins.
+    // The long-lived reader attached (the first progress line follows the warm-up).
     soak.expect_line(STEP, |l| l.contains("\"event\":\"progress\""));
-    std::thread::sleep(Duration::from_secs(2));
+    // Ctrl-C while the writer, the long-lived reader and a churning one run, each handling
+    // the SIGTERM the soak stops it with.
+    wait_until(STEP, "3 processes of the soak handle SIGTERM", || {
+        let children = soak.children();
+        children.len() >= 3
+            && children
+                .iter()
+                .all(|&pid| catches_signal(pid, Signal::TERM))
+    });
     soak.signal(Signal::INT);
     let v = summary(&soak);
     let status = soak.wait_exit(STEP);
@@ -105,14 +113,12 @@ fn a_reader_role_stops_on_sigterm_while_it_waits_for_a_writer() {
         "role",
         &watchdog,
     );
-    // It installs its signal handler right after creating its iceoryx2 node (whose files
-    // appear under the scene's prefix), then waits for a writer.
-    let until = std::time::Instant::now() + STEP;
-    while scene.files().is_empty() {
-        assert!(std::time::Instant::now() < until, "the role made no node");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    std::thread::sleep(Duration::from_millis(300));
+    // It installs its signal handler right after creating its first iceoryx2 node, then
+    // waits for a writer.
+    wait_until(STEP, "the role handles SIGTERM", || {
+        role.catches(Signal::TERM)
+    });
+    assert!(!scene.files().is_empty(), "the role made no node");
     role.signal(Signal::TERM);
     let status = role.wait_exit(Duration::from_secs(10));
     assert!(status.success(), "{}", role.describe());
