@@ -25,6 +25,7 @@ mod binary;
 pub mod fingerprint;
 mod proc;
 mod scene;
+mod signal;
 pub mod stats;
 pub mod test_pattern;
 mod veth;

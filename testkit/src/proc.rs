@@ -8,9 +8,10 @@ use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
-use rustix::process::{Pid, Signal, kill_process};
+use rustix::process::{Pid, Signal};
 
 use crate::Watchdog;
+use crate::signal::send_signal;
 
 /// Env var [`Proc::start`] sets to the parent's pid, for [`die_with_parent`] (and for
 /// `ygg demo-role`, which reads the same variable).
@@ -48,13 +49,6 @@ pub fn die_with_parent() -> std::io::Result<bool> {
         ));
     }
     Ok(true)
-}
-
-/// Sends `signal` to `pid` (errors ignored: the process may be gone).
-pub(crate) fn send(pid: u32, signal: Signal) {
-    if let Some(pid) = i32::try_from(pid).ok().and_then(Pid::from_raw) {
-        let _ = kill_process(pid, signal);
-    }
 }
 
 /// What a child's stdin is.
@@ -176,7 +170,7 @@ impl Proc {
 
     /// Sends `signal` (e.g. `Signal::INT`) to the process.
     pub fn signal(&self, signal: Signal) {
-        send(self.child.id(), signal);
+        send_signal(self.child.id(), signal);
     }
 
     /// Writes one line to the child's stdin ([`Input::Lines`]).
