@@ -1,4 +1,4 @@
-//! The bridge's work on a full-office message after decoding (`ygg-writer bridge-zmq`, the
+//! The bridge's work on a full-office message after decoding (`ygg bridge zmq`, the
 //! build path): the message's graph built in the mint layout, then the live graph brought
 //! to equal it with `SceneGraph::sync_to` (the target borrowed: indexes it changes much are
 //! rebuilt) or `sync_to_owned` (the target taken: its trees are adopted, as the bridge

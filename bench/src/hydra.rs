@@ -516,7 +516,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut md = String::new();
     writeln!(
         md,
-        "# Hydra's stream: bridge-zmq + Yggdrasil readers against spark_dsg DsgReceivers\n"
+        "# Hydra's stream: `ygg bridge zmq` + Yggdrasil readers against spark_dsg DsgReceivers\n"
     )?;
     writeln!(
         md,

@@ -24,6 +24,7 @@
 
 mod bridge;
 mod demo;
+mod error_chain;
 mod export;
 mod import;
 mod inspect;
@@ -35,6 +36,8 @@ mod window;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+use error_chain::error_chain;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -114,16 +117,4 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
-}
-
-/// `e` and each of its sources, joined by `": "`.
-fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
 }

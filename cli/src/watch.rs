@@ -15,6 +15,7 @@ use clap::Parser;
 use ygg_reader::{ReceiveError, SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::SceneView;
 
+use crate::error_chain::error_chain;
 use crate::query::seconds;
 
 /// Arguments of `ygg watch`.
@@ -104,7 +105,7 @@ pub fn run(args: &WatchArgs) -> Result<ExitCode, Box<dyn std::error::Error>> {
                     ReceiveError::Corrupt { .. } | ReceiveError::BorrowLimit { .. },
                 )),
             ) => {
-                eprintln!("ygg watch: warning: {}", crate::error_chain(&e));
+                eprintln!("ygg watch: warning: {}", error_chain(&e));
             }
             Err(e) => return Err(e.into()),
         }

@@ -4,7 +4,7 @@
 //! * [`layout::build`] turns a Spark-DSG graph into a [`ygg_store::SceneGraph`] in one of
 //!   the paper's layouts ([`layout::Layout`]). [`layout::LayerRole`] says what each
 //!   layer of such a scene holds.
-//! * [`objects::Objects`] answers the object-query contract of `ygg-reader query` on any
+//! * [`objects::Objects`] answers the object-query contract of `ygg query` on any
 //!   view of such a scene, live or archived.
 //! * [`replay::SlamReplay`] drives a SLAM-like stream of mutations over a built scene.
 //!
@@ -52,7 +52,7 @@
 //! Import is strict by default: the first fault is an error. Real Hydra output written
 //! by older versions holds faults Spark-DSG itself refuses (an edge to an absent node,
 //! say). [`ImportOptions::LENIENT`] ([`read_file_with`], [`import_file`],
-//! [`parse_json_with`], [`parse_binary_with`]; `ygg-writer import --lenient`) imports
+//! [`parse_json_with`], [`parse_binary_with`]; `ygg import --lenient`) imports
 //! what can be imported: it drops the items of every [`DropClass`] and returns an
 //! [`ImportReport`] with each class dropped, its count and its first example, so
 //! nothing is lost silently. The resulting [`DsgGraph`] keeps every invariant.

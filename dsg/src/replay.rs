@@ -1,6 +1,6 @@
 //! [`SlamReplay`]: a SLAM-like stream of updates for a served office: agent poses
 //! appended at the tick rate, objects moving and appearing, the mesh growing room by
-//! room. It drives `ygg-writer serve --rate` and the demo.
+//! room. It drives `ygg serve --rate` and `ygg demo`.
 
 use crate::NodeSymbol;
 use crate::layout::{self, LayerRole};

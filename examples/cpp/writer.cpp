@@ -4,7 +4,7 @@
 // each tick publishes only the layers that changed. Serves until SIGINT/SIGTERM.
 //
 // Layer names follow Spark-DSG's (ROOMS, OBJECTS, MESH, AGENTS), so the object queries
-// (ygg-reader query --scene, the Rust readers) answer on this scene too.
+// (ygg query --scene, the Rust readers) answer on this scene too.
 //
 // Run: build/writer SCENE
 #include <yggdrasil.hpp>

@@ -1,4 +1,4 @@
-//! A line of `ygg-reader query` input: parsing never panics, and a parsed query answers
+//! A line of `ygg query` input: parsing never panics, and a parsed query answers
 //! (or errors) on a small office without panicking.
 #![no_main]
 

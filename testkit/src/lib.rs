@@ -27,6 +27,7 @@ pub mod fingerprint;
 mod poll;
 mod proc;
 mod scene;
+mod signal;
 pub mod stats;
 pub mod test_pattern;
 mod veth;

@@ -11,8 +11,9 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
 use rustix::event::{PollFd, PollFlags, Timespec, poll};
-use rustix::process::{Pid, PidfdFlags, Signal, kill_process, pidfd_open};
+use rustix::process::{Pid, PidfdFlags, Signal, pidfd_open};
 
+use crate::signal::send_signal;
 use crate::{POLL_INTERVAL, Watchdog};
 
 /// Env var [`Proc::start`] sets to the parent's pid, for [`die_with_parent`] (and for
@@ -51,13 +52,6 @@ pub fn die_with_parent() -> std::io::Result<bool> {
         ));
     }
     Ok(true)
-}
-
-/// Sends `signal` to `pid` (errors ignored: the process may be gone).
-pub(crate) fn send(pid: u32, signal: Signal) {
-    if let Some(pid) = i32::try_from(pid).ok().and_then(Pid::from_raw) {
-        let _ = kill_process(pid, signal);
-    }
 }
 
 /// What a child's stdin is.
@@ -187,7 +181,7 @@ impl Proc {
 
     /// Sends `signal` (e.g. `Signal::INT`) to the process.
     pub fn signal(&self, signal: Signal) {
-        send(self.child.id(), signal);
+        send_signal(self.child.id(), signal);
     }
 
     /// Writes one line to the child's stdin ([`Input::Lines`]).
@@ -539,6 +533,6 @@ mod tests {
         assert!(!catches_signal(sleep[0], Signal::TERM));
         shell.signal(Signal::TERM);
         assert!(shell.wait_exit(Duration::from_secs(30)).success());
-        send(sleep[0], Signal::KILL);
+        send_signal(sleep[0], Signal::KILL);
     }
 }

@@ -5,6 +5,8 @@ use std::time::Duration;
 
 use rustix::process::Signal;
 
+use crate::signal::send_signal;
+
 /// Kills registered children when a test runs past its deadline, so no test hangs forever.
 #[derive(Debug)]
 pub struct Watchdog {
@@ -31,7 +33,7 @@ impl Watchdog {
             if timeout.timed_out() {
                 eprintln!("watchdog: test exceeded {limit:?}, killing its children");
                 for pid in pids.lock().unwrap_or_else(PoisonError::into_inner).iter() {
-                    crate::proc::send(*pid, Signal::KILL);
+                    send_signal(*pid, Signal::KILL);
                 }
             }
         });

@@ -1,5 +1,5 @@
-"""A Spark-DSG ZMQ publisher driven by commands on stdin: the real peer of `ygg-writer
-bridge-zmq` in the tests and in `ygg-bench hydra`.
+"""A Spark-DSG ZMQ publisher driven by commands on stdin: the real peer of `ygg
+bridge zmq` in the tests and in `ygg-bench hydra`.
 
 Loads a graph, binds spark_dsg's own `DsgSender` to a free TCP port on 127.0.0.1 and
 prints `port=N`. Then reads one command a line and answers one line each (`ok ...` or

@@ -8,8 +8,9 @@
 //! loan does), sends and notifies. The subscriber records (sequence, held, thread CPU ns spent
 //! since it last blocked) and reports them like a latency reader (`seen` lines).
 
+use super::clock::{thread_cpu_ns, unix_ns};
 use super::commands::{Cmd, print_records};
-use super::{Res, thread_cpu_ns, unix_ns};
+use super::error::Res;
 use iceoryx2::config::Config;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;

@@ -10,7 +10,8 @@
 //! ([`Scene::clean_up`]) once every process of the case has exited, and files of earlier,
 //! killed runs by [`remove_stale`].
 
-use super::{Res, check_interrupted};
+use super::error::Res;
+use super::interrupt::check_interrupted;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use ygg_testkit::{Input, LineError, Proc};

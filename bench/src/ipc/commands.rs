@@ -6,7 +6,7 @@
 use std::io::{BufRead, Write};
 use std::sync::mpsc::{self, Receiver};
 
-use super::Res;
+use super::error::Res;
 
 /// Commands from the writer.
 pub(crate) enum Cmd {

@@ -25,9 +25,10 @@
 //!   deserializes each into an owned [`PlainGraph`] and prints `sock <seq> <done ns>
 //!   <nodes>`.
 
+use super::clock::{thread_cpu_ns, unix_ns};
 use super::commands::{Cmd, read_commands};
+use super::error::Res;
 use super::socket::PlainGraph;
-use super::{Res, thread_cpu_ns, unix_ns};
 use crate::ladder::answer_line::{AnswerLine, mesh_checksum};
 use crate::ladder::harness::Target;
 use crate::ladder::workload::Query;

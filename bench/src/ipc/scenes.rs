@@ -1,6 +1,6 @@
 //! The graphs the benchmark publishes and the mutations it applies between publishes.
 
-use super::Res;
+use super::error::Res;
 use ygg_dsg::DsgGraph;
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::office::{OfficeParams, generate};

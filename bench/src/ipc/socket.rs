@@ -2,7 +2,8 @@
 //! serde + postcard (a compact binary serde format in the spirit of bincode), sent over a
 //! Unix socket, deserialized by the reader into the same owned structure.
 
-use super::Res;
+use super::error::Res;
+use super::interrupt::check_interrupted;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::os::unix::net::{UnixListener, UnixStream};
@@ -146,7 +147,7 @@ impl SocketServer {
     pub fn accept(&mut self, timeout: Duration) -> Res<()> {
         let deadline = Instant::now() + timeout;
         loop {
-            super::check_interrupted()?;
+            check_interrupted()?;
             match self.listener.accept() {
                 Ok((stream, _)) => {
                     stream.set_nonblocking(false)?;

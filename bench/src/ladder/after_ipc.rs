@@ -18,11 +18,14 @@
 use super::answer_line::{AnswerLine, TAG, mesh_checksum};
 use super::harness::{Row, Target};
 use super::report::fmt_us;
+use super::update::{move_object, object_rooms};
 use super::workload::{Query, Workload};
 use super::ygg::YggTarget;
 use crate::ipc::cases::{ATTACH_TIMEOUT, EXIT_GRACE, Jitter, writer};
 use crate::ipc::child::{ReaderProc, Scene, remove_stale};
-use crate::ipc::{Res, check_interrupted, install_signal_handler, unix_ns};
+use crate::ipc::clock::unix_ns;
+use crate::ipc::error::Res;
+use crate::ipc::interrupt::{check_interrupted, install_signal_handler};
 use std::time::{Duration, Instant};
 use ygg_dsg::DsgGraph;
 use ygg_dsg::layout::Layout;
@@ -37,7 +40,7 @@ const ANSWER_TIMEOUT: Duration = Duration::from_secs(30);
 /// The room and point of the Q1a `after_update_local` times: the workload's first Q1a in
 /// the moved object's room.
 fn update_query(w: &Workload, dsg: &DsgGraph) -> Option<(u64, Point)> {
-    let room = super::object_rooms(dsg).get(&w.update_object).copied()?;
+    let room = object_rooms(dsg).get(&w.update_object).copied()?;
     w.queries.iter().find_map(|q| match q {
         Query::Nearest { room: r, point } if *r == room => Some((room, *point)),
         _ => None,
@@ -184,7 +187,7 @@ fn measure(
         check_interrupted()?;
         std::thread::sleep(jitter.apply(gap));
         let t0 = unix_ns();
-        super::move_object(writer.graph_mut(), &mesh, w, i)?;
+        move_object(writer.graph_mut(), &mesh, w, i)?;
         let t1 = unix_ns();
         let report = writer.publish()?;
         let t2 = unix_ns();

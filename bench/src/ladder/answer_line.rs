@@ -2,7 +2,7 @@
 //! between the ladder's writer ([`super::after_ipc`]) and `ygg-bench ipc reader --mode
 //! q1a`.
 
-use super::Answer;
+use super::workload::Answer;
 use std::fmt;
 use std::str::FromStr;
 use ygg_store::{NodeId, SceneView};

@@ -3,8 +3,7 @@
 //! by scanning it, as in the paper's baseline), the mesh as a separate vertex array
 //! that objects index into with `mesh_connections`.
 
-use super::Answer;
-use super::workload::{Query, Scan};
+use super::workload::{Answer, Query, Scan};
 use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::Point;
 

@@ -1,8 +1,7 @@
 //! Timing: every query of the workload on every target, repeated, with per-family
 //! median and p99.
 
-use super::Answer;
-use super::workload::{Query, Workload};
+use super::workload::{Answer, Query, Workload};
 use std::collections::BTreeMap;
 use std::time::Instant;
 use ygg_testkit::stats::median_p99_us;

@@ -1,9 +1,8 @@
 //! The floor for Q1a / Q1b: a bare kiddo `ImmutableKdTree` per room over the room's
 //! claimed vertices, with no scene graph around it (no tie rule, no nesting).
 
-use super::Answer;
 use super::harness::Target;
-use super::workload::Query;
+use super::workload::{Answer, Query};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rustc_hash::FxHashMap;
 use ygg_dsg::{DsgGraph, NodeKind};

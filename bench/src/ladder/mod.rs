@@ -8,21 +8,19 @@ pub mod harness;
 pub mod kiddo_floor;
 pub mod reader_cpu;
 pub mod report;
+pub mod update;
 pub mod workload;
 pub mod writer_ticks;
-
-/// Sorted object ids answering one query.
-pub type Answer = Vec<u64>;
-
 pub mod ygg;
 
 use harness::{Row, Target, compare_answers, time_targets};
 use report::{Report, StaticRow};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use workload::Workload;
+use update::{move_object, object_rooms};
+use workload::{Answer, Workload};
+use ygg_dsg::DsgGraph;
 use ygg_dsg::layout::{self, Layout};
-use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::{NodeId, SceneGraph, SceneView};
 use ygg_testkit::stats::median_p99_us;
 
@@ -229,26 +227,6 @@ impl Target for FlatTarget<'_> {
     }
 }
 
-/// The room of every object (its ancestor room).
-fn object_rooms(dsg: &DsgGraph) -> rustc_hash::FxHashMap<u64, u64> {
-    let index = dsg.node_index();
-    dsg.nodes
-        .iter()
-        .filter(|n| n.kind == NodeKind::Object)
-        .filter_map(|o| {
-            let mut cur = o.parent;
-            for _ in 0..8 {
-                let n = &dsg.nodes[*index.get(&cur?)?];
-                if n.kind == NodeKind::Room {
-                    return Some((o.id, n.id));
-                }
-                cur = n.parent;
-            }
-            None
-        })
-        .collect()
-}
-
 /// Median latency of moving one mesh point of an object (the mapping stack's most
 /// frequent edit), with whatever boxes and indexes the layout keeps live. Each sample
 /// moves a point and the next puts it back, so the graph ends as it started.
@@ -328,29 +306,6 @@ fn after_update_local(
         });
     }
     rows
-}
-
-/// The after-update mutation, sample `i`: the object's mesh nodes (`mesh`: id and
-/// original points) translated by the workload's translation on even samples and put
-/// back on odd ones, so the graph ends bit-for-bit as it started.
-pub(crate) fn move_object(
-    g: &mut SceneGraph,
-    mesh: &[(NodeId, Vec<[f32; 3]>)],
-    w: &Workload,
-    i: usize,
-) -> ygg_store::EditResult {
-    for (m, original) in mesh {
-        let points: Vec<[f32; 3]> = if i.is_multiple_of(2) {
-            original
-                .iter()
-                .map(|p| [0, 1, 2].map(|a| p[a] + w.update_translation[a]))
-                .collect()
-        } else {
-            original.clone()
-        };
-        g.set_geometry(*m, points)?;
-    }
-    Ok(())
 }
 
 /// Runs the Spark-DSG Python anchor on the same input and workload.

@@ -1,5 +1,6 @@
 //! The paper's query workload: 64 reference points per room (fixed seed), Q1a, Q1b at
-//! five radii, Q2 with random cones, Q3 for four label classes.
+//! five radii, Q2 with random cones, Q3 for four label classes; and [`Answer`], what every
+//! target returns for a query.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -9,7 +10,8 @@ use ygg_dsg::{DsgGraph, NodeKind};
 use ygg_store::Point;
 use ygg_store::query::{CheckedCone, within_radius};
 
-use super::Answer;
+/// Sorted object ids answering one query.
+pub type Answer = Vec<u64>;
 
 /// Radii of Q1b, metres.
 pub const RADII: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];

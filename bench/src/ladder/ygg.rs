@@ -4,9 +4,8 @@
 //! [`Objects::objects_with_label`] over the whole scene on every rung. Mint and saffron have live indexes and
 //! object boxes, chocolate scans.
 
-use super::Answer;
 use super::harness::Target;
-use super::workload::{Query, Scan};
+use super::workload::{Answer, Query, Scan};
 use rustc_hash::FxHashMap;
 use std::borrow::Cow;
 use std::cell::OnceCell;

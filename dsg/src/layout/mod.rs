@@ -17,7 +17,7 @@
 //! like their objects' ids, so "ties go to the smaller node id" on mesh nodes means
 //! "ties go to the smaller object id". Derived ids (mesh and group nodes) come from
 //! their object's or room's own id, not from its rank, so that they stay the same from
-//! one message of a live stream to the next (`ygg-writer bridge-zmq`).
+//! one message of a live stream to the next (`ygg bridge zmq`).
 //!
 //! Features: objects keep `position_x/y/z`; every node keeps `name`, `semantic_label`
 //! and `timestamp_ns` when the file gives them, and its stored Spark-DSG bounding box as

@@ -1,4 +1,4 @@
-//! Object-level queries: the query contract of `ygg-reader query`, answered on a scene
+//! Object-level queries: the query contract of `ygg query`, answered on a scene
 //! built by [`crate::layout::build`] in any layout, live or archived.
 //!
 //! # Contract

@@ -3,7 +3,7 @@
 use super::{ObjectQueryError, Objects};
 use ygg_store::{NodeId, Point, SceneView};
 
-/// One query of the contract, as `ygg-reader query` reads it from a JSON line
+/// One query of the contract, as `ygg query` reads it from a JSON line
 /// (`{"op":"nearest_object","point":[x,y,z]}`, ...): see [`ObjectQuery::from_json`].
 /// Serializes to that same form.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

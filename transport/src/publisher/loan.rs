@@ -8,7 +8,7 @@
 //! (rounded up to a power of two), and freed chunks are reused last-in first-out by whatever
 //! segment comes next. Without the release, every chunk that ever held a large segment keeps
 //! its tmpfs pages: a writer serving the office touched ~1 MB per chunk in use, and its
-//! resident shared memory grew by ~100 MB a minute under reader churn (`ygg-bench soak`). With
+//! resident shared memory grew by ~100 MB a minute under reader churn (`ygg-soak`). With
 //! it, the pages written into the pool stay near a budget of four times the newest segments
 //! (at least 16 MiB; [`ChunkPages`]).
 #![expect(

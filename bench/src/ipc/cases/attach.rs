@@ -3,9 +3,11 @@
 
 use super::super::child::ReaderProc;
 use super::super::child::Scene;
+use super::super::clock::unix_ns;
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::{Row, median};
-use super::super::{Res, check_interrupted, unix_ns};
-use super::Ctx;
+use super::context::Ctx;
 use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, reader_args};
 use std::time::Instant;
 use ygg_store::snapshot::POINT_CHUNK_LEN;

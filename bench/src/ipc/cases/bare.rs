@@ -2,10 +2,12 @@
 
 use super::super::bare::BarePublisher;
 use super::super::child::Readers;
+use super::super::clock::unix_ns;
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::{Row, median, median_p99_us};
-use super::super::{Res, check_interrupted, unix_ns};
+use super::context::{Ctx, in_scene};
 use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, Jitter, collect_seen, reader_args};
-use super::{Ctx, in_scene};
 
 /// A bare iceoryx2 publisher (this process) and subscriber process, payloads of `len`
 /// bytes, `samples` publishes timed from the publish call to the subscriber holding them.

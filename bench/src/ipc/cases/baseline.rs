@@ -1,14 +1,20 @@
 //! The ~40 MB graph through shared memory and through a Unix socket (serde + postcard).
 
 use super::super::child::{ReaderProc, Scene};
+use super::super::clock::unix_ns;
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::{Row, fmt_bytes, median, median_p99_us};
+use super::super::scenes;
 use super::super::socket::{PlainGraph, SocketServer};
-use super::super::{Res, check_interrupted, scenes, unix_ns};
+use super::context::{Ctx, in_scene};
 use super::drive::{ATTACH_TIMEOUT, Case, EXIT_GRACE, reader_args};
-use super::{BIG_BYTES, Ctx, in_scene};
 use std::time::{Duration, Instant};
 use ygg_dsg::layout::Layout;
 use ygg_store::SceneGraph;
+
+/// Size of the socket-vs-shared-memory graph.
+const BIG_BYTES: usize = 40_000_000;
 
 /// The ~40 MB graph: the built-in office in chocolate layout (no indexes: exactly the
 /// content the plain structure of the socket baseline carries), scaled to ~40 MB.

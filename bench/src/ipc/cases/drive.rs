@@ -1,10 +1,12 @@
 //! The plumbing every case shares: a writer for a scene, reader arguments, publishing
 //! with pauses and collecting what each reader saw, and turning that into latencies.
 
-use super::super::child::Readers;
+use super::super::child::{Readers, Scene};
+use super::super::clock::unix_ns;
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::{Row, median, median_p99_us};
-use super::super::{Res, check_interrupted, unix_ns};
-use super::{Plan, Scene};
+use super::plan::Plan;
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 use ygg_store::SceneGraph;

@@ -2,13 +2,17 @@
 //!
 //! One file per case family ([`sizes`], [`readers`], [`office`], [`baseline`] (the
 //! socket against shared memory), [`qps`], [`throughput`]); the writer/reader plumbing
-//! they share (publishing, collecting what readers saw, timing) is in [`drive`].
+//! they share (publishing, collecting what readers saw, timing) is in [`drive`], the
+//! state they share (the scenes built once, the files scenes left) in [`context`], and
+//! the sample counts of a quick or full run in [`plan`].
 
 mod attach;
 mod bare;
 mod baseline;
+mod context;
 mod drive;
 mod office;
+mod plan;
 mod qps;
 mod readers;
 mod sizes;
@@ -16,170 +20,16 @@ mod throughput;
 
 pub(crate) use drive::{ATTACH_TIMEOUT, EXIT_GRACE, Jitter, writer};
 
-use super::child::{Scene, remove_stale};
+use super::args::{ALL_GROUPS, Group, IpcArgs};
+use super::child::remove_stale;
+use super::error::Res;
+use super::interrupt::{check_interrupted, install_signal_handler};
 use super::report::{self, Meta, Row, fmt_bytes};
 use super::scenes;
-use super::{IpcArgs, Res, check_interrupted, install_signal_handler};
+use context::Ctx;
+use plan::Plan;
 use std::time::{Duration, Instant};
-use ygg_dsg::DsgGraph;
-use ygg_dsg::layout::Layout;
-use ygg_store::{SceneGraph, SceneView};
-
-/// Groups of cases (`--only`).
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Group {
-    /// Segment size sweep, 1 reader.
-    Sizes,
-    /// Reader count 1, 2, 4, 8 with a small update.
-    Readers,
-    /// One agent pose vs the whole office.
-    Office,
-    /// The same ~40 MB graph through shared memory and through a Unix socket.
-    Socket,
-    /// Reader queries per second while the writer publishes.
-    Qps,
-    /// Writer updates per second with no reader, 4 idle and 4 busy readers.
-    Throughput,
-}
-
-const ALL_GROUPS: [Group; 6] = [
-    Group::Sizes,
-    Group::Readers,
-    Group::Office,
-    Group::Socket,
-    Group::Qps,
-    Group::Throughput,
-];
-
-/// Size of the socket-vs-shared-memory graph.
-const BIG_BYTES: usize = 40_000_000;
-
-/// Sample counts and durations.
-struct Plan {
-    quick: bool,
-    /// (label, bytes, samples)
-    sizes: Vec<(&'static str, usize, usize)>,
-    small_samples: usize,
-    office_samples: usize,
-    full_samples: usize,
-    attach_samples: usize,
-    shm40_samples: usize,
-    socket_samples: usize,
-    qps_secs: f64,
-    throughput_secs: f64,
-    throughput_reps: usize,
-    /// Pause between publishes (at least; twice the last publish's duration for big ones),
-    /// so that readers are back to waiting and every publish is seen.
-    gap: Duration,
-}
-
-impl Plan {
-    fn new(quick: bool) -> Plan {
-        if quick {
-            Plan {
-                quick,
-                sizes: vec![
-                    ("1KB", 1_000, 100),
-                    ("10KB", 10_000, 100),
-                    ("100KB", 100_000, 100),
-                    ("1MB", 1_000_000, 60),
-                    ("10MB", 10_000_000, 20),
-                    ("40MB", 40_000_000, 10),
-                ],
-                small_samples: 150,
-                office_samples: 150,
-                full_samples: 20,
-                attach_samples: 5,
-                shm40_samples: 8,
-                socket_samples: 6,
-                qps_secs: 1.5,
-                throughput_secs: 1.0,
-                throughput_reps: 2,
-                gap: Duration::from_millis(3),
-            }
-        } else {
-            Plan {
-                quick,
-                sizes: vec![
-                    ("1KB", 1_000, 500),
-                    ("10KB", 10_000, 500),
-                    ("100KB", 100_000, 400),
-                    ("1MB", 1_000_000, 200),
-                    ("10MB", 10_000_000, 60),
-                    ("40MB", 40_000_000, 30),
-                    ("100MB", 100_000_000, 15),
-                    ("200MB", 200_000_000, 12),
-                ],
-                small_samples: 600,
-                office_samples: 600,
-                full_samples: 60,
-                attach_samples: 15,
-                shm40_samples: 25,
-                socket_samples: 15,
-                qps_secs: 5.0,
-                throughput_secs: 3.0,
-                throughput_reps: 3,
-                gap: Duration::from_millis(4),
-            }
-        }
-    }
-}
-
-/// State shared by the cases of a run.
-struct Ctx {
-    plan: Plan,
-    /// The built-in office (scale 1) and its mint layout, built on first use.
-    office: Option<(DsgGraph, SceneGraph)>,
-    /// The office split into 103 rooms, mint layout, built on first use.
-    office103: Option<SceneGraph>,
-    /// The ~40 MB graph (the office in chocolate layout at a larger scale), built on first use.
-    big: Option<(SceneGraph, f64)>,
-    leftovers: Vec<String>,
-}
-
-impl Ctx {
-    /// The built-in office and its mint layout.
-    fn office(&mut self) -> Res<&(DsgGraph, SceneGraph)> {
-        if self.office.is_none() {
-            let t = Instant::now();
-            let dsg = scenes::office_dsg(1.0);
-            let mint = scenes::office(&dsg, Layout::Mint)?;
-            eprintln!(
-                "office: {} nodes, {} layers, {} archived (mint), built in {:.1?}",
-                mint.node_count(),
-                mint.layers().count(),
-                fmt_bytes(scenes::archived_bytes(&mint) as f64),
-                t.elapsed()
-            );
-            self.office = Some((dsg, mint));
-        }
-        Ok(self.office.as_ref().expect("just built"))
-    }
-
-    /// A copy of the office in mint layout.
-    fn office_mint(&mut self) -> Res<SceneGraph> {
-        Ok(self.office()?.1.clone())
-    }
-
-    /// A copy of the office split into [`scenes::MANY_ROOMS`] rooms, in mint layout.
-    fn office_many_rooms(&mut self) -> Res<SceneGraph> {
-        if self.office103.is_none() {
-            let t = Instant::now();
-            let dsg = ygg_dsg::office::split_rooms(&self.office()?.0, scenes::MANY_ROOMS)?;
-            let mint = scenes::office(&dsg, Layout::Mint)?;
-            eprintln!(
-                "office with {} rooms: {} nodes, {} layers, {} archived (mint), built in {:.1?}",
-                scenes::MANY_ROOMS,
-                mint.node_count(),
-                mint.layers().count(),
-                fmt_bytes(scenes::archived_bytes(&mint) as f64),
-                t.elapsed()
-            );
-            self.office103 = Some(mint);
-        }
-        Ok(self.office103.clone().expect("just built"))
-    }
-}
+use ygg_store::SceneView;
 
 /// Runs the benchmark and writes its reports.
 pub fn run(args: &IpcArgs) -> Res<()> {
@@ -310,19 +160,6 @@ fn run_round(ctx: &mut Ctx, groups: &[Group]) -> Res<Vec<Row>> {
         }
     }
     Ok(rows)
-}
-
-/// Runs `f` in a fresh scene; afterwards (every process of the scene has exited) records
-/// files the scene left behind and removes them.
-fn in_scene<T>(ctx: &mut Ctx, tag: &str, f: impl FnOnce(&mut Ctx, &Scene) -> Res<T>) -> Res<T> {
-    let scene = Scene::new(&format!("ipcb-{tag}"));
-    let result = f(ctx, &scene);
-    if let Some(left) = scene.clean_up()
-        && result.is_ok()
-    {
-        ctx.leftovers.push(left);
-    }
-    result
 }
 
 /// How the cases were measured; the numbers in them are the run's own (cores, layer

@@ -1,9 +1,10 @@
 //! The office cases: one agent pose against every layer republished, mint and chocolate.
 
+use super::super::error::Res;
 use super::super::report::{Row, median, median_p99_us};
-use super::super::{Res, scenes};
+use super::super::scenes;
+use super::context::{Ctx, in_scene};
 use super::drive::{Case, Observed, QUERY_LAYER};
-use super::{Ctx, in_scene};
 use ygg_dsg::layout::Layout;
 use ygg_store::snapshot::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN};
 

@@ -1,9 +1,11 @@
 //! `qps_*`: reader queries per second while the writer publishes at 0, 10 and 100 Hz.
 
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::Row;
-use super::super::{Res, check_interrupted, scenes};
+use super::super::scenes;
+use super::context::{Ctx, in_scene};
 use super::drive::{Case, QUERY_LAYER, qps_lines};
-use super::{Ctx, in_scene};
 use std::time::{Duration, Instant};
 
 pub(super) fn case_qps(ctx: &mut Ctx) -> Res<Vec<Row>> {

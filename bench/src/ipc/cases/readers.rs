@@ -1,9 +1,10 @@
 //! `readers_N`: a small update, visible in every one of N reader processes.
 
+use super::super::error::Res;
 use super::super::report::{Row, median_p99_us};
-use super::super::{Res, scenes};
+use super::super::scenes;
+use super::context::{Ctx, in_scene};
 use super::drive::Case;
-use super::{Ctx, in_scene};
 
 pub(super) fn case_readers(ctx: &mut Ctx, n: usize) -> Res<Row> {
     let (graph, node) = scenes::small()?;

@@ -1,9 +1,10 @@
 //! `size_*`: one layer of a given size republished, one reader.
 
+use super::super::error::Res;
 use super::super::report::Row;
-use super::super::{Res, scenes};
+use super::super::scenes;
+use super::context::{Ctx, in_scene};
 use super::drive::Case;
-use super::{Ctx, in_scene};
 
 pub(super) fn case_size(ctx: &mut Ctx, label: &str, bytes: usize, samples: usize) -> Res<Row> {
     let (graph, node) = scenes::sized_layer(bytes)?;

@@ -1,10 +1,12 @@
 //! `writer_throughput_*`: writer updates per second with no reader, 4 idle and 4 busy readers.
 
 use super::super::child::Readers;
+use super::super::error::Res;
+use super::super::interrupt::check_interrupted;
 use super::super::report::{Row, median};
-use super::super::{Res, check_interrupted, scenes};
+use super::super::scenes;
+use super::context::{Ctx, in_scene};
 use super::drive::{ATTACH_TIMEOUT, EXIT_GRACE, QUERY_LAYER, qps_lines, reader_args, writer};
-use super::{Ctx, in_scene};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 

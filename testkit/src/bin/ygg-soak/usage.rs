@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn status_fields_are_read_in_kilobytes_and_missing_ones_are_zero() {
-        let status = "Name:\tygg-writer\nVmRSS:\t  123456 kB\nRssAnon:\t   100000 kB\n\
+        let status = "Name:\tygg\nVmRSS:\t  123456 kB\nRssAnon:\t   100000 kB\n\
                       RssFile:\t    3456 kB\nRssShmem:\t   20000 kB\n";
         let fds = [
             "/dev/null",
