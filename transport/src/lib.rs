@@ -71,7 +71,10 @@ pub mod protocol;
 mod publisher;
 pub use publisher::shm;
 mod service;
-pub use service::{SetupError, init_iceoryx_logging};
+pub use service::{
+    ENV_YGG_LOG, SetupError, UnknownLogLevelError, init_binding_logging, init_iceoryx_logging,
+    set_iceoryx_log_level,
+};
 mod subscriber;
 pub mod test_pattern;
 #[cfg(test)]
