@@ -8,11 +8,10 @@
 //! once).
 
 use crate::args::{Out, point_arg, str_arg, str_array_arg};
-use crate::errors::{FfiError, FfiResult, YggStatus, guard};
-use crate::lists::YggNodeList;
-use crate::snapshot::{YggSnapshot, view_arg};
+use crate::errors::{FfiError, YggStatus, guard};
+use crate::lists::{YggNodeList, deliver_ids, deliver_ranked};
+use crate::snapshot::{YggSnapshot, snapshot_arg, view_arg};
 use std::ffi::c_char;
-use ygg_dsg::objects::Objects;
 use ygg_store::query::{self, ConeView};
 use ygg_store::{LayerId, NodeId, Scope};
 
@@ -29,34 +28,6 @@ fn scope(layer: u32) -> Scope {
 
 fn query_error(e: impl std::fmt::Display) -> FfiError {
     FfiError::invalid(format!("query refused: {e}"))
-}
-
-/// Writes ids (or the empty list on error) to `out` and passes the error on.
-pub(crate) fn deliver_ids(found: FfiResult<Vec<NodeId>>, out: Out<YggNodeList>) -> FfiResult {
-    match found {
-        Ok(ids) => {
-            out.write(YggNodeList::of_ids(ids));
-            Ok(())
-        }
-        Err(e) => {
-            out.write(YggNodeList::EMPTY);
-            Err(e)
-        }
-    }
-}
-
-/// Writes ranked ids (or the empty list on error) to `out`.
-fn deliver_ranked(found: FfiResult<Vec<(NodeId, f32)>>, out: Out<YggNodeList>) -> FfiResult {
-    match found {
-        Ok(ranked) => {
-            out.write(YggNodeList::of_ranked(ranked));
-            Ok(())
-        }
-        Err(e) => {
-            out.write(YggNodeList::EMPTY);
-            Err(e)
-        }
-    }
 }
 
 /// At most `m` nodes in `layer` (or `YGG_ALL_LAYERS`) closest to `point`, nearest first
@@ -78,7 +49,7 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_nodes(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nearest_nodes(&view_arg(snapshot)?, scope(layer), c, m).map_err(query_error)
+            query::nearest_nodes(view_arg(snapshot)?, scope(layer), c, m).map_err(query_error)
         })();
         deliver_ranked(found, out)
     })
@@ -103,7 +74,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_within_radius(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nodes_within_radius(&view_arg(snapshot)?, scope(layer), c, radius)
+            query::nodes_within_radius(view_arg(snapshot)?, scope(layer), c, radius)
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -129,7 +100,7 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_in_subtree(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nearest_in_subtree(&view_arg(snapshot)?, NodeId(root), c, m).map_err(query_error)
+            query::nearest_in_subtree(view_arg(snapshot)?, NodeId(root), c, m).map_err(query_error)
         })();
         deliver_ranked(found, out)
     })
@@ -163,7 +134,7 @@ pub unsafe extern "C" fn ygg_snapshot_visible(
                 half_angle: half_angle_rad,
                 range,
             };
-            query::visible(&view_arg(snapshot)?, NodeId(root), &cone).map_err(query_error)
+            query::visible(view_arg(snapshot)?, NodeId(root), &cone).map_err(query_error)
         })();
         deliver_ids(found, out)
     })
@@ -187,7 +158,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_with_label(
             // SAFETY: the caller's contract for `label`.
             let label = unsafe { str_arg(label, "label") }?;
             Ok(query::nodes_with_label(
-                &view_arg(snapshot)?,
+                view_arg(snapshot)?,
                 scope(layer),
                 label,
             ))
@@ -216,7 +187,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_having(
             // SAFETY: the caller's contract for `keys` and `count`.
             let keys = unsafe { str_array_arg(keys, count, "keys") }?;
             Ok(query::nodes_having(
-                &view_arg(snapshot)?,
+                view_arg(snapshot)?,
                 scope(layer),
                 &keys,
             ))
@@ -239,7 +210,7 @@ pub unsafe extern "C" fn ygg_snapshot_subtree(
     guard("ygg_snapshot_subtree", || {
         // SAFETY: the caller's contract for `list`.
         let out = unsafe { Out::new(list, "list") }?;
-        let found = view_arg(snapshot).map(|view| query::subtree(&view, NodeId(root)));
+        let found = view_arg(snapshot).map(|view| query::subtree(view, NodeId(root)));
         deliver_ids(found, out)
     })
 }
@@ -265,8 +236,9 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_object(
                 Out::new(object, "object")?,
             )
         };
-        let view = view_arg(snapshot)?;
-        let nearest = Objects::new(&view).nearest_object(c).map_err(query_error)?;
+        let nearest = snapshot_arg(snapshot)?
+            .with_objects(|o| o.nearest_object(c))
+            .map_err(query_error)?;
         found.write(nearest.is_some());
         out.write(nearest.map_or(0, |n| n.0));
         Ok(())
@@ -291,9 +263,8 @@ pub unsafe extern "C" fn ygg_snapshot_objects_within(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            let view = view_arg(snapshot)?;
-            Objects::new(&view)
-                .objects_within(c, radius)
+            snapshot_arg(snapshot)?
+                .with_objects(|o| o.objects_within(c, radius))
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -321,9 +292,8 @@ pub unsafe extern "C" fn ygg_snapshot_visible_objects(
         let found = (|| {
             // SAFETY: the caller's contract for `eye` and `dir`.
             let (eye, dir) = unsafe { (point_arg(eye, "eye")?, point_arg(dir, "dir")?) };
-            let view = view_arg(snapshot)?;
-            Objects::new(&view)
-                .visible_objects(eye, dir, half_angle_deg, range)
+            snapshot_arg(snapshot)?
+                .with_objects(|o| o.visible_objects(eye, dir, half_angle_deg, range))
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -347,8 +317,7 @@ pub unsafe extern "C" fn ygg_snapshot_objects_with_label(
         let found = (|| {
             // SAFETY: the caller's contract for `label`.
             let label = unsafe { str_arg(label, "label") }?;
-            let view = view_arg(snapshot)?;
-            Ok(Objects::new(&view).objects_with_label(label))
+            Ok(snapshot_arg(snapshot)?.with_objects(|o| o.objects_with_label(label)))
         })();
         deliver_ids(found, out)
     })
