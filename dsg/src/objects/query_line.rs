@@ -106,9 +106,13 @@ impl ObjectQuery {
                 ));
             }
         }
-        // Serde quotes names in backticks (`missing field `label``); JSON users read
-        // double quotes.
-        ObjectQuery::deserialize(v).map_err(|e| e.to_string().replace('`', "\""))
+        // Serde quotes names in backticks (`missing field `label``) and calls an op a
+        // variant; JSON users read double quotes and the field's name.
+        ObjectQuery::deserialize(v).map_err(|e| {
+            e.to_string()
+                .replace('`', "\"")
+                .replace("unknown variant", "unknown op")
+        })
     }
 }
 
