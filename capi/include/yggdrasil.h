@@ -83,7 +83,7 @@ typedef struct ygg_graph ygg_graph;
 // between threads); the snapshots it gives are independent handles.
 typedef struct ygg_reader ygg_reader;
 
-// A validated snapshot of a scene.
+// A validated snapshot of a scene, with its view and object catalog built once.
 //
 // Thread-safety: immutable; any number of threads may query it at once. Destroy it only
 // when no thread uses it (pointers its accessors returned die with it).
@@ -143,6 +143,27 @@ typedef struct ygg_feature {
   // Its length in bytes.
   size_t str_len;
 } ygg_feature;
+
+// The newest agent pose of a scene (`ygg_snapshot_newest_pose`).
+typedef struct ygg_agent_pose {
+  // The pose node: the largest id of the `AGENTS` layer with a point.
+  uint64_t node;
+  // Its position (x y z).
+  float position[3];
+  // The previous pose's position (1 m behind along -x when there is a single pose).
+  float previous[3];
+  // The unit direction of travel, from `previous` to `position` (+x when they
+  // coincide).
+  float heading[3];
+} ygg_agent_pose;
+
+// Where a room's objects live in a per-room layout (`ygg_snapshot_room_scope`).
+typedef struct ygg_room_scope {
+  // The room's claimed-mesh layer: its objects' mesh nodes.
+  uint32_t mesh_layer;
+  // The room's claimed group node: every object of the room nests under it.
+  uint64_t claimed;
+} ygg_room_scope;
 
 // Options of `ygg_writer_create`; a zero field keeps the default.
 typedef struct ygg_writer_options {
@@ -415,7 +436,7 @@ enum ygg_status ygg_graph_save(struct ygg_graph *graph, const char *path);
 // Imports a Spark-DSG file (JSON, `.json.gz` or binary `.sparkdsg`) and lays it out in
 // one of the paper's layouts: `layout` is `"vanilla"`, `"chocolate"`, `"mint"` or
 // `"saffron"`. Strict unless `lenient` (which drops what cannot be imported, as
-// `ygg-writer import --lenient` does).
+// `ygg import --lenient` does).
 //
 // Ownership: `*out` receives a new graph handle the caller destroys.
 //
@@ -433,6 +454,14 @@ enum ygg_status ygg_graph_import_dsg(const char *path,
 // `list` is null or points to a list filled by this library and not modified since.
 // Thread-safety: do not free one list from two threads.
 enum ygg_status ygg_node_list_free(struct ygg_node_list *list);
+
+// Sets the transport's log level, process-wide: `"trace"`, `"debug"`, `"info"`,
+// `"warn"`, `"error"` (the default, unless the environment variable `YGG_LOG` names
+// another level) or `"fatal"`; `YGG_STATUS_INVALID_ARGUMENT` for any other name.
+//
+// # Safety
+// `level` is null or NUL-terminated.
+enum ygg_status ygg_set_log_level(const char *level);
 
 // At most `m` nodes in `layer` (or `YGG_ALL_LAYERS`) closest to `point`, nearest first
 // with distances (ties to the smaller id). Uses a layer index when one covers the scope.
@@ -468,8 +497,8 @@ enum ygg_status ygg_snapshot_nearest_in_subtree(const struct ygg_snapshot *snaps
                                                 struct ygg_node_list *list);
 
 // Nodes of `root`'s sub-tree with a point inside the view cone (apex `eye`, direction
-// `dir`, half-angle `half_angle_rad` radians in `[0, pi]`, `range` metres; inclusive),
-// ascending.
+// `dir`, half-angle `half_angle_deg` degrees in `[0, 180]` as everywhere in the C API,
+// `range` metres; inclusive), ascending.
 //
 // # Safety
 // `eye` and `dir` are null or hold 3 floats each; `list` is null or writable.
@@ -477,7 +506,7 @@ enum ygg_status ygg_snapshot_visible(const struct ygg_snapshot *snapshot,
                                      uint64_t root,
                                      const float *eye,
                                      const float *dir,
-                                     float half_angle_rad,
+                                     float half_angle_deg,
                                      float range,
                                      struct ygg_node_list *list);
 
@@ -756,6 +785,52 @@ enum ygg_status ygg_snapshot_node_feature(const struct ygg_snapshot *snapshot,
                                           uint64_t node,
                                           const char *key,
                                           struct ygg_feature *feature);
+
+// The newest agent pose (the `AGENTS` layer's largest id with a point) and the pose
+// before it: `*found` says whether there is one (no `AGENTS` layer, or no pose with a
+// point yet, is `false`); `*pose` is written only when found.
+//
+// # Safety
+// `found` and `pose` are null or writable.
+enum ygg_status ygg_snapshot_newest_pose(const struct ygg_snapshot *snapshot,
+                                         bool *found,
+                                         struct ygg_agent_pose *pose);
+
+// The room (a node of the `ROOMS` layer) whose box holds `point` in x and y, the
+// smallest id when several do: `*found` says whether one does, `*room` is its id (0 when
+// none).
+//
+// # Safety
+// `point` is null or holds 3 floats; `found` and `room` are null or writable.
+enum ygg_status ygg_snapshot_room_of(const struct ygg_snapshot *snapshot,
+                                     const float *point,
+                                     bool *found,
+                                     uint64_t *room);
+
+// Where `room`'s objects live in a per-room layout (chocolate, mint, saffron): its
+// claimed-mesh layer and claimed group node (`ygg_snapshot_*` object queries are
+// answered over a room by restricting to the group's sub-tree). `*found` is `false` in
+// another layout or for an unknown room; `*scope` is written only when found.
+//
+// # Safety
+// `found` and `scope` are null or writable.
+enum ygg_status ygg_snapshot_room_scope(const struct ygg_snapshot *snapshot,
+                                        uint64_t room,
+                                        bool *found,
+                                        struct ygg_room_scope *scope);
+
+// The distinct parents of the `count` nodes in `nodes` (the objects owning mesh nodes),
+// ascending; nodes without a parent or not in the snapshot are left out.
+//
+// Ownership: `*list` is overwritten (not freed) with a list the caller frees with
+// `ygg_node_list_free`; on error it is the empty list.
+//
+// # Safety
+// `nodes` is null or holds `count` ids; `list` is null or writable.
+enum ygg_status ygg_snapshot_owners(const struct ygg_snapshot *snapshot,
+                                    const uint64_t *nodes,
+                                    size_t count,
+                                    struct ygg_node_list *list);
 
 // Creates the writer of `scene` (ASCII letters, digits, `-`, `_`, `.`) and moves
 // `graph` into it: on success the graph handle is destroyed (use `ygg_writer_graph`

@@ -96,6 +96,16 @@ private:
   std::size_t count_ = 0;
 };
 
+/// The newest agent pose: node, position, previous position, unit heading (x y z each).
+using AgentPose = ygg_agent_pose;
+/// Where a room's objects live in a per-room layout: its claimed-mesh layer and group node.
+using RoomScope = ygg_room_scope;
+
+/// Sets how much the shared-memory transport prints on stderr, process-wide: "trace",
+/// "debug", "info", "warn", "error" (the default unless the environment variable YGG_LOG
+/// names another level) or "fatal". Throws Error for any other name.
+inline void set_log_level(const std::string& level) { check(ygg_set_log_level(level.c_str())); }
+
 /// A node of a ranked answer: id and distance (metres).
 struct Ranked {
   NodeId id;
@@ -368,9 +378,9 @@ public:
   std::vector<Ranked> nearest_in_subtree(NodeId root, Point c, std::size_t m) const {
     return detail::ranked([&](ygg_node_list* l) { return ygg_snapshot_nearest_in_subtree(handle_, root, c.data(), m, l); });
   }
-  std::vector<NodeId> visible(NodeId root, Point eye, Point dir, float half_angle_rad, float range) const {
+  std::vector<NodeId> visible(NodeId root, Point eye, Point dir, float half_angle_deg, float range) const {
     return detail::ids([&](ygg_node_list* l) {
-      return ygg_snapshot_visible(handle_, root, eye.data(), dir.data(), half_angle_rad, range, l);
+      return ygg_snapshot_visible(handle_, root, eye.data(), dir.data(), half_angle_deg, range, l);
     });
   }
   std::vector<NodeId> nodes_with_label(const std::string& label, LayerId layer = kAllLayers) const {
@@ -406,6 +416,33 @@ public:
   /// Q3: objects carrying `label`.
   std::vector<NodeId> objects_with_label(const std::string& label) const {
     return detail::ids([&](ygg_node_list* l) { return ygg_snapshot_objects_with_label(handle_, label.c_str(), l); });
+  }
+
+  // ---- where the agent is (ygg_dsg::layout; Spark-DSG layer names) ----
+  /// The newest agent pose (the AGENTS layer's largest id with a point), if any.
+  std::optional<AgentPose> newest_pose() const {
+    bool found = false;
+    AgentPose pose{};
+    check(ygg_snapshot_newest_pose(handle_, &found, &pose));
+    return found ? std::optional<AgentPose>(pose) : std::nullopt;
+  }
+  /// The room whose box holds `p` in x and y (the smallest id when several do), if any.
+  std::optional<NodeId> room_of(Point p) const {
+    bool found = false;
+    NodeId room = 0;
+    check(ygg_snapshot_room_of(handle_, p.data(), &found, &room));
+    return found ? std::optional<NodeId>(room) : std::nullopt;
+  }
+  /// Where `room`'s objects live in a per-room layout (chocolate, mint, saffron), if it is one.
+  std::optional<RoomScope> room_scope(NodeId room) const {
+    bool found = false;
+    RoomScope scope{};
+    check(ygg_snapshot_room_scope(handle_, room, &found, &scope));
+    return found ? std::optional<RoomScope>(scope) : std::nullopt;
+  }
+  /// The distinct parents of `nodes` (the objects owning mesh nodes), ascending.
+  std::vector<NodeId> owners(const std::vector<NodeId>& nodes) const {
+    return detail::ids([&](ygg_node_list* l) { return ygg_snapshot_owners(handle_, nodes.data(), nodes.size(), l); });
   }
 
   /// The C handle (still owned by this object).

@@ -62,6 +62,32 @@ pub(crate) unsafe fn points_arg<'a>(
     Ok(unsafe { std::slice::from_raw_parts(xyz.cast::<Point>(), count) })
 }
 
+/// An array argument of `count` node ids; null is accepted for `count == 0`.
+///
+/// # Safety
+/// `ids` is null or points to `count` readable, aligned `uint64_t` that stay unchanged
+/// during the call.
+pub(crate) unsafe fn ids_arg<'a>(
+    ids: *const u64,
+    count: usize,
+    argument: &str,
+) -> FfiResult<&'a [u64]> {
+    if count == 0 {
+        return Ok(&[]);
+    }
+    if ids.is_null() {
+        return Err(FfiError::null(argument));
+    }
+    if !ids.is_aligned() {
+        return Err(FfiError::invalid(format!(
+            "`{argument}` is not aligned for uint64_t"
+        )));
+    }
+    // SAFETY: non-null and aligned (checked); the caller guarantees `count` readable ids
+    // that no one writes during the call.
+    Ok(unsafe { std::slice::from_raw_parts(ids, count) })
+}
+
 /// An array argument of `count` C strings; null is accepted for `count == 0`.
 ///
 /// # Safety

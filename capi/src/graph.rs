@@ -7,12 +7,12 @@
 use crate::args::{Out, points_arg, str_arg};
 use crate::errors::{FfiError, FfiResult, YggStatus, guard};
 use crate::handle::{self, Handle, Kind};
-use crate::writer::YggWriter;
 use std::ffi::c_char;
 use std::ptr::NonNull;
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::{ImportOptions, read_file_with};
 use ygg_store::{EditResult, FeatureValue, LayerId, NodeId, SceneGraph};
+use ygg_writer::SceneWriter;
 
 /// A scene graph being built: owned by the caller (`ygg_graph_create`,
 /// `ygg_graph_import_dsg`), or the live graph of a writer (`ygg_writer_graph`).
@@ -32,7 +32,7 @@ enum GraphSlot {
     /// The handle owns it.
     Owned(SceneGraph),
     /// It is a writer's live graph; the handle is destroyed with the writer.
-    OfWriter(NonNull<YggWriter>),
+    OfWriter(NonNull<SceneWriter>),
 }
 
 impl Handle for YggGraph {
@@ -41,8 +41,9 @@ impl Handle for YggGraph {
 }
 
 impl YggGraph {
-    /// A handle to the live graph of `writer` (registered by the writer).
-    pub(crate) fn of_writer(writer: NonNull<YggWriter>) -> Self {
+    /// A handle to the live graph of `writer`, the scene writer inside a writer handle
+    /// (registered by that handle, and destroyed before it).
+    pub(crate) fn of_writer(writer: NonNull<SceneWriter>) -> Self {
         YggGraph {
             slot: GraphSlot::OfWriter(writer),
         }
@@ -54,10 +55,11 @@ impl YggGraph {
             GraphSlot::Owned(g) => Ok(g),
             // SAFETY: a writer's graph handle is unregistered and freed by
             // `ygg_writer_destroy` before the writer's box is freed, so while this handle
-            // resolves, `w` points to the live writer that made it; the C API forbids
+            // resolves, `w` points to the scene writer inside the live (boxed, unmoved)
+            // writer handle that made it; the C API forbids
             // using a writer and its graph from two threads at once, so this is the only
             // reference into the writer during the call.
-            GraphSlot::OfWriter(w) => Ok(unsafe { &mut w.as_mut().writer }.graph_mut()),
+            GraphSlot::OfWriter(w) => Ok(unsafe { w.as_mut() }.graph_mut()),
         }
     }
 
@@ -589,7 +591,7 @@ pub unsafe extern "C" fn ygg_graph_save(graph: *mut YggGraph, path: *const c_cha
 /// Imports a Spark-DSG file (JSON, `.json.gz` or binary `.sparkdsg`) and lays it out in
 /// one of the paper's layouts: `layout` is `"vanilla"`, `"chocolate"`, `"mint"` or
 /// `"saffron"`. Strict unless `lenient` (which drops what cannot be imported, as
-/// `ygg-writer import --lenient` does).
+/// `ygg import --lenient` does).
 ///
 /// Ownership: `*out` receives a new graph handle the caller destroys.
 ///

@@ -5,7 +5,10 @@
 //!
 //! * Start with `ygg_graph_create` ([`graph`]) to build a scene graph, then
 //!   `ygg_writer_create` ([`writer`]) to publish it; a planner opens a reader
-//!   ([`reader`]) and queries the snapshots it receives ([`snapshot`], [`query`]).
+//!   ([`reader`]) and queries the snapshots it receives ([`snapshot`], [`query`],
+//!   [`whereabouts`]: where the agent is).
+//! * The transport prints errors only on stderr unless `YGG_LOG` or
+//!   `ygg_set_log_level` ([`logging`]) asks for more.
 //!
 //! # Rules at the boundary
 //! * Handles are opaque pointers (`ygg_graph`, `ygg_writer`, `ygg_reader`,
@@ -30,9 +33,11 @@ pub mod errors;
 pub mod graph;
 mod handle;
 pub mod lists;
+pub mod logging;
 pub mod query;
 pub mod reader;
 pub mod snapshot;
+pub mod whereabouts;
 pub mod writer;
 
 pub use errors::YggStatus;

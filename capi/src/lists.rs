@@ -1,7 +1,8 @@
 //! [`YggNodeList`]: the node-id lists queries return, owned by the caller until
 //! `ygg_node_list_free`.
 
-use crate::errors::{YggStatus, guard};
+use crate::args::Out;
+use crate::errors::{FfiResult, YggStatus, guard};
 use ygg_store::NodeId;
 
 /// A list of node ids returned by a query, ascending by id, or ranked (nearest first)
@@ -85,4 +86,35 @@ pub unsafe extern "C" fn ygg_node_list_free(list: *mut YggNodeList) -> YggStatus
         }
         Ok(())
     })
+}
+
+/// Writes ids (or the empty list on error) to `out` and passes the error on.
+pub(crate) fn deliver_ids(found: FfiResult<Vec<NodeId>>, out: Out<YggNodeList>) -> FfiResult {
+    match found {
+        Ok(ids) => {
+            out.write(YggNodeList::of_ids(ids));
+            Ok(())
+        }
+        Err(e) => {
+            out.write(YggNodeList::EMPTY);
+            Err(e)
+        }
+    }
+}
+
+/// Writes ranked ids (or the empty list on error) to `out`.
+pub(crate) fn deliver_ranked(
+    found: FfiResult<Vec<(NodeId, f32)>>,
+    out: Out<YggNodeList>,
+) -> FfiResult {
+    match found {
+        Ok(ranked) => {
+            out.write(YggNodeList::of_ranked(ranked));
+            Ok(())
+        }
+        Err(e) => {
+            out.write(YggNodeList::EMPTY);
+            Err(e)
+        }
+    }
 }

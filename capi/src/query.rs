@@ -1,6 +1,6 @@
 //! The paper's queries on a snapshot handle. Each calls the one Rust implementation:
 //! the store's queries (`ygg_store::query`) and the object-query contract
-//! (`ygg_dsg::objects::Objects`, as `ygg-reader query` answers it).
+//! (`ygg_dsg::objects::Objects`, as `ygg query` answers it).
 //!
 //! Every query fills a caller-provided `ygg_node_list`. Ownership: `*list` is
 //! overwritten (not freed) with a list the caller frees with `ygg_node_list_free`; on
@@ -8,12 +8,12 @@
 //! once).
 
 use crate::args::{Out, point_arg, str_arg, str_array_arg};
-use crate::errors::{FfiError, FfiResult, YggStatus, guard};
-use crate::lists::YggNodeList;
-use crate::snapshot::{YggSnapshot, view_arg};
+use crate::errors::{FfiError, YggStatus, guard};
+use crate::lists::{YggNodeList, deliver_ids, deliver_ranked};
+use crate::snapshot::{YggSnapshot, snapshot_arg, view_arg};
 use std::ffi::c_char;
-use ygg_dsg::objects::Objects;
-use ygg_store::query::{self, ConeView};
+use ygg_dsg::objects::cone_view;
+use ygg_store::query;
 use ygg_store::{LayerId, NodeId, Scope};
 
 /// The `layer` argument of a query that means the whole graph rather than one layer.
@@ -29,34 +29,6 @@ fn scope(layer: u32) -> Scope {
 
 fn query_error(e: impl std::fmt::Display) -> FfiError {
     FfiError::invalid(format!("query refused: {e}"))
-}
-
-/// Writes ids (or the empty list on error) to `out` and passes the error on.
-pub(crate) fn deliver_ids(found: FfiResult<Vec<NodeId>>, out: Out<YggNodeList>) -> FfiResult {
-    match found {
-        Ok(ids) => {
-            out.write(YggNodeList::of_ids(ids));
-            Ok(())
-        }
-        Err(e) => {
-            out.write(YggNodeList::EMPTY);
-            Err(e)
-        }
-    }
-}
-
-/// Writes ranked ids (or the empty list on error) to `out`.
-fn deliver_ranked(found: FfiResult<Vec<(NodeId, f32)>>, out: Out<YggNodeList>) -> FfiResult {
-    match found {
-        Ok(ranked) => {
-            out.write(YggNodeList::of_ranked(ranked));
-            Ok(())
-        }
-        Err(e) => {
-            out.write(YggNodeList::EMPTY);
-            Err(e)
-        }
-    }
 }
 
 /// At most `m` nodes in `layer` (or `YGG_ALL_LAYERS`) closest to `point`, nearest first
@@ -78,7 +50,7 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_nodes(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nearest_nodes(&view_arg(snapshot)?, scope(layer), c, m).map_err(query_error)
+            query::nearest_nodes(view_arg(snapshot)?, scope(layer), c, m).map_err(query_error)
         })();
         deliver_ranked(found, out)
     })
@@ -103,7 +75,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_within_radius(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nodes_within_radius(&view_arg(snapshot)?, scope(layer), c, radius)
+            query::nodes_within_radius(view_arg(snapshot)?, scope(layer), c, radius)
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -129,15 +101,15 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_in_subtree(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            query::nearest_in_subtree(&view_arg(snapshot)?, NodeId(root), c, m).map_err(query_error)
+            query::nearest_in_subtree(view_arg(snapshot)?, NodeId(root), c, m).map_err(query_error)
         })();
         deliver_ranked(found, out)
     })
 }
 
 /// Nodes of `root`'s sub-tree with a point inside the view cone (apex `eye`, direction
-/// `dir`, half-angle `half_angle_rad` radians in `[0, pi]`, `range` metres; inclusive),
-/// ascending.
+/// `dir`, half-angle `half_angle_deg` degrees in `[0, 180]` as everywhere in the C API,
+/// `range` metres; inclusive), ascending.
 ///
 /// # Safety
 /// `eye` and `dir` are null or hold 3 floats each; `list` is null or writable.
@@ -147,7 +119,7 @@ pub unsafe extern "C" fn ygg_snapshot_visible(
     root: u64,
     eye: *const f32,
     dir: *const f32,
-    half_angle_rad: f32,
+    half_angle_deg: f32,
     range: f32,
     list: *mut YggNodeList,
 ) -> YggStatus {
@@ -157,13 +129,8 @@ pub unsafe extern "C" fn ygg_snapshot_visible(
         let found = (|| {
             // SAFETY: the caller's contract for `eye` and `dir`.
             let (eye, dir) = unsafe { (point_arg(eye, "eye")?, point_arg(dir, "dir")?) };
-            let cone = ConeView {
-                eye,
-                dir,
-                half_angle: half_angle_rad,
-                range,
-            };
-            query::visible(&view_arg(snapshot)?, NodeId(root), &cone).map_err(query_error)
+            let cone = cone_view(eye, dir, half_angle_deg, range).map_err(query_error)?;
+            query::visible(view_arg(snapshot)?, NodeId(root), &cone).map_err(query_error)
         })();
         deliver_ids(found, out)
     })
@@ -187,7 +154,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_with_label(
             // SAFETY: the caller's contract for `label`.
             let label = unsafe { str_arg(label, "label") }?;
             Ok(query::nodes_with_label(
-                &view_arg(snapshot)?,
+                view_arg(snapshot)?,
                 scope(layer),
                 label,
             ))
@@ -216,7 +183,7 @@ pub unsafe extern "C" fn ygg_snapshot_nodes_having(
             // SAFETY: the caller's contract for `keys` and `count`.
             let keys = unsafe { str_array_arg(keys, count, "keys") }?;
             Ok(query::nodes_having(
-                &view_arg(snapshot)?,
+                view_arg(snapshot)?,
                 scope(layer),
                 &keys,
             ))
@@ -239,7 +206,7 @@ pub unsafe extern "C" fn ygg_snapshot_subtree(
     guard("ygg_snapshot_subtree", || {
         // SAFETY: the caller's contract for `list`.
         let out = unsafe { Out::new(list, "list") }?;
-        let found = view_arg(snapshot).map(|view| query::subtree(&view, NodeId(root)));
+        let found = view_arg(snapshot).map(|view| query::subtree(view, NodeId(root)));
         deliver_ids(found, out)
     })
 }
@@ -265,8 +232,9 @@ pub unsafe extern "C" fn ygg_snapshot_nearest_object(
                 Out::new(object, "object")?,
             )
         };
-        let view = view_arg(snapshot)?;
-        let nearest = Objects::new(&view).nearest_object(c).map_err(query_error)?;
+        let nearest = snapshot_arg(snapshot)?
+            .with_objects(|o| o.nearest_object(c))
+            .map_err(query_error)?;
         found.write(nearest.is_some());
         out.write(nearest.map_or(0, |n| n.0));
         Ok(())
@@ -291,9 +259,8 @@ pub unsafe extern "C" fn ygg_snapshot_objects_within(
         let found = (|| {
             // SAFETY: the caller's contract for `point`.
             let c = unsafe { point_arg(point, "point") }?;
-            let view = view_arg(snapshot)?;
-            Objects::new(&view)
-                .objects_within(c, radius)
+            snapshot_arg(snapshot)?
+                .with_objects(|o| o.objects_within(c, radius))
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -321,9 +288,8 @@ pub unsafe extern "C" fn ygg_snapshot_visible_objects(
         let found = (|| {
             // SAFETY: the caller's contract for `eye` and `dir`.
             let (eye, dir) = unsafe { (point_arg(eye, "eye")?, point_arg(dir, "dir")?) };
-            let view = view_arg(snapshot)?;
-            Objects::new(&view)
-                .visible_objects(eye, dir, half_angle_deg, range)
+            snapshot_arg(snapshot)?
+                .with_objects(|o| o.visible_objects(eye, dir, half_angle_deg, range))
                 .map_err(query_error)
         })();
         deliver_ids(found, out)
@@ -347,8 +313,7 @@ pub unsafe extern "C" fn ygg_snapshot_objects_with_label(
         let found = (|| {
             // SAFETY: the caller's contract for `label`.
             let label = unsafe { str_arg(label, "label") }?;
-            let view = view_arg(snapshot)?;
-            Ok(Objects::new(&view).objects_with_label(label))
+            Ok(snapshot_arg(snapshot)?.with_objects(|o| o.objects_with_label(label)))
         })();
         deliver_ids(found, out)
     })

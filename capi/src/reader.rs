@@ -70,6 +70,7 @@ pub unsafe extern "C" fn ygg_reader_open(
     out: *mut *mut YggReader,
 ) -> YggStatus {
     guard("ygg_reader_open", || {
+        crate::logging::init();
         // SAFETY: the caller's contract for `scene` and `out`.
         let (scene, out) = unsafe { (str_arg(scene, "scene")?, Out::new(out, "out")?) };
         // SAFETY: `options` is null or points to a readable `YggReaderOptions`.

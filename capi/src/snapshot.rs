@@ -12,19 +12,21 @@ use crate::args::{Out, str_arg};
 use crate::errors::{FfiError, FfiResult, YggStatus, guard};
 use crate::graph::graph_arg;
 use crate::handle::{self, Handle, Kind};
-use crate::lists::YggNodeList;
+use crate::lists::{YggNodeList, deliver_ids};
+use self_cell::self_cell;
 use std::collections::HashMap;
 use std::ffi::c_char;
 use std::sync::Mutex;
+use ygg_dsg::objects::Objects;
 use ygg_reader::SceneSnapshot;
 use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, Point, SceneView, SnapshotFile};
 
-/// A validated snapshot of a scene.
+/// A validated snapshot of a scene, with its view and object catalog built once.
 ///
 /// Thread-safety: immutable; any number of threads may query it at once. Destroy it only
 /// when no thread uses it (pointers its accessors returned die with it).
 pub struct YggSnapshot {
-    source: SnapshotSource,
+    catalog: SnapshotCatalog,
     /// Points of nodes that lie in two or more chunks of a chunked layer, copied into
     /// one piece on first request and kept for the handle's life (so the pointer
     /// `ygg_snapshot_node_points` hands out stays valid as long as the snapshot).
@@ -38,6 +40,29 @@ enum SnapshotSource {
     /// A mapped `.ygg` file, or a graph archived in memory.
     File(SnapshotFile),
 }
+
+self_cell!(
+    /// A snapshot's bytes and the [`ArchivedScene`] view over them, built once.
+    struct SnapshotView {
+        owner: SnapshotSource,
+        #[covariant]
+        dependent: ArchivedScene,
+    }
+);
+
+/// The object catalog over a snapshot's view.
+type SceneObjects<'a> = Objects<'a, ArchivedScene<'a>>;
+
+self_cell!(
+    /// A snapshot's view and its object catalog ([`Objects`]), whose lazily built caches
+    /// are kept across queries (the view and catalog are built once per handle, not per
+    /// call).
+    struct SnapshotCatalog {
+        owner: SnapshotView,
+        #[not_covariant]
+        dependent: SceneObjects,
+    }
+);
 
 impl Handle for YggSnapshot {
     const KIND: Kind = Kind::Snapshot;
@@ -57,24 +82,35 @@ impl YggSnapshot {
     }
 
     fn new(source: SnapshotSource) -> Self {
+        let view = SnapshotView::new(source, |source| match source {
+            SnapshotSource::Live(s) => s.view(),
+            SnapshotSource::File(f) => f.view(),
+        });
         YggSnapshot {
-            source,
+            catalog: SnapshotCatalog::new(view, |view| Objects::new(view.borrow_dependent())),
             joined_points: Mutex::default(),
         }
     }
 
     /// The scene as a view over the snapshot's bytes (every store query runs on it).
-    pub(crate) fn view(&self) -> ArchivedScene<'_> {
-        match &self.source {
-            SnapshotSource::Live(s) => s.view(),
-            SnapshotSource::File(f) => f.view(),
-        }
+    pub(crate) fn view(&self) -> &ArchivedScene<'_> {
+        self.catalog.borrow_owner().borrow_dependent()
+    }
+
+    /// Runs `f` on the snapshot's object catalog (the object contract's queries).
+    pub(crate) fn with_objects<T>(&self, f: impl FnOnce(&SceneObjects<'_>) -> T) -> T {
+        self.catalog.with_dependent(|_, objects| f(objects))
     }
 }
 
+/// The snapshot handle argument.
+pub(crate) fn snapshot_arg<'a>(snapshot: *const YggSnapshot) -> FfiResult<&'a YggSnapshot> {
+    handle::resolve(snapshot, "snapshot")
+}
+
 /// The view of a snapshot handle argument.
-pub(crate) fn view_arg<'a>(snapshot: *const YggSnapshot) -> FfiResult<ArchivedScene<'a>> {
-    Ok(handle::resolve(snapshot, "snapshot")?.view())
+pub(crate) fn view_arg<'a>(snapshot: *const YggSnapshot) -> FfiResult<&'a ArchivedScene<'a>> {
+    Ok(snapshot_arg(snapshot)?.view())
 }
 
 /// The node `id` of `view`, or `YGG_STATUS_NOT_FOUND`.
@@ -295,7 +331,7 @@ pub unsafe extern "C" fn ygg_snapshot_layer_nodes(
             ids.sort_unstable();
             Ok(ids)
         });
-        crate::query::deliver_ids(found, out)
+        deliver_ids(found, out)
     })
 }
 
@@ -313,7 +349,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_layer(
         // SAFETY: the caller's contract for `layer`.
         let out = unsafe { Out::new(layer, "layer") }?;
         let view = view_arg(snapshot)?;
-        out.write(view.node_layer(node_arg(&view, node)?).0);
+        out.write(view.node_layer(node_arg(view, node)?).0);
         Ok(())
     })
 }
@@ -340,7 +376,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_points(
         let (xyz, count) = unsafe { (Out::new(xyz, "xyz")?, Out::new(count, "count")?) };
         let handle = handle::resolve(snapshot, "snapshot")?;
         let view = handle.view();
-        let points = view.points(node_arg(&view, node)?);
+        let points = view.points(node_arg(view, node)?);
         let first = match points.as_slice() {
             // The slice lies in the snapshot's segment bytes, which the handle keeps mapped.
             Some(one) => one.as_ptr(),
@@ -387,7 +423,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_parent(
             )
         };
         let view = view_arg(snapshot)?;
-        let p = view.parent(node_arg(&view, node)?);
+        let p = view.parent(node_arg(view, node)?);
         has.write(p.is_some());
         out.write(p.map_or(0, |p| p.0));
         Ok(())
@@ -412,8 +448,8 @@ pub unsafe extern "C" fn ygg_snapshot_node_children(
         // SAFETY: the caller's contract for `list`.
         let out = unsafe { Out::new(list, "list") }?;
         let found =
-            view_arg(snapshot).and_then(|view| Ok(view.children(node_arg(&view, node)?).collect()));
-        crate::query::deliver_ids(found, out)
+            view_arg(snapshot).and_then(|view| Ok(view.children(node_arg(view, node)?).collect()));
+        deliver_ids(found, out)
     })
 }
 
@@ -438,7 +474,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_aabb(
             )
         };
         let view = view_arg(snapshot)?;
-        let b = view.aabb(node_arg(&view, node)?);
+        let b = view.aabb(node_arg(view, node)?);
         has.write(b.is_some());
         if let Some(b) = b {
             out.write(b.to_array());
@@ -462,7 +498,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_has_label(
         // SAFETY: the caller's contract for `label` and `has_label`.
         let (label, out) = unsafe { (str_arg(label, "label")?, Out::new(has_label, "has_label")?) };
         let view = view_arg(snapshot)?;
-        out.write(view.has_label(node_arg(&view, node)?, label));
+        out.write(view.has_label(node_arg(view, node)?, label));
         Ok(())
     })
 }
@@ -481,7 +517,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_label_count(
         // SAFETY: the caller's contract for `count`.
         let out = unsafe { Out::new(count, "count") }?;
         let view = view_arg(snapshot)?;
-        out.write(view.labels(node_arg(&view, node)?).count());
+        out.write(view.labels(node_arg(view, node)?).count());
         Ok(())
     })
 }
@@ -506,7 +542,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_label(
         let (label, len) = unsafe { (Out::new(label, "label")?, Out::new(len, "len")?) };
         let view = view_arg(snapshot)?;
         let text = view
-            .labels(node_arg(&view, node)?)
+            .labels(node_arg(view, node)?)
             .nth(index)
             .ok_or_else(|| {
                 FfiError::new(
@@ -537,7 +573,7 @@ pub unsafe extern "C" fn ygg_snapshot_node_feature(
         // SAFETY: the caller's contract for `key` and `feature`.
         let (key, out) = unsafe { (str_arg(key, "key")?, Out::new(feature, "feature")?) };
         let view = view_arg(snapshot)?;
-        let value = view.feature(node_arg(&view, node)?, key).ok_or_else(|| {
+        let value = view.feature(node_arg(view, node)?, key).ok_or_else(|| {
             FfiError::new(
                 YggStatus::NotFound,
                 format!("node {node} has no feature {key:?}"),

@@ -18,7 +18,7 @@ use ygg_writer::{SceneWriter, WriterWaitError};
 /// Thread-safety: not thread-safe. Use a writer and its graph from one thread at a time
 /// (they may move between threads together).
 pub struct YggWriter {
-    pub(crate) writer: SceneWriter,
+    writer: SceneWriter,
     /// The handle `ygg_writer_graph` gave out, destroyed with the writer.
     graph: Option<*mut YggGraph>,
 }
@@ -89,6 +89,7 @@ pub unsafe extern "C" fn ygg_writer_create(
     out: *mut *mut YggWriter,
 ) -> YggStatus {
     guard("ygg_writer_create", || {
+        crate::logging::init();
         // SAFETY: the caller's contract for `scene` and `out`.
         let (scene, out) = unsafe { (str_arg(scene, "scene")?, Out::new(out, "out")?) };
         // SAFETY: `options` is null or points to a readable `YggWriterOptions`.
@@ -160,7 +161,7 @@ pub unsafe extern "C" fn ygg_writer_graph(
         let handle = match w.graph {
             Some(g) => g,
             None => {
-                let g = handle::register(YggGraph::of_writer(NonNull::from(&mut *w)));
+                let g = handle::register(YggGraph::of_writer(NonNull::from(&mut w.writer)));
                 w.graph = Some(g);
                 g
             }

@@ -1,6 +1,6 @@
-// A planner-style reader: for each new snapshot, the room of the newest agent pose (its
-// parent), the object nearest to it and the objects within 2 m, answered in place on the
-// shared-memory bytes; stops after COUNT snapshots (default 30; 0 = until SIGINT/SIGTERM).
+// A planner-style reader: for each new snapshot, the newest agent pose and its room
+// (ygg_dsg::layout through the C API), the object nearest to it and the objects within
+// 2 m, answered in place on the shared-memory bytes; stops after COUNT snapshots (default 30; 0 = until SIGINT/SIGTERM).
 //
 // Run the writer first, then: build/reader SCENE [COUNT]
 #include <yggdrasil.hpp>
@@ -21,22 +21,19 @@ int main(int argc, char** argv) try {
       std::printf("no new snapshot (writer %s)\n", reader.writer_status() == YGG_WRITER_STATE_GONE ? "gone" : "alive");
       continue;
     }
-    const auto agents = snapshot->layer_by_name("AGENTS");
-    const auto poses = agents ? snapshot->layer_nodes(*agents) : std::vector<ygg::NodeId>{};
-    if (poses.empty()) {
+    const std::optional<ygg::AgentPose> pose = snapshot->newest_pose();  // the AGENTS layer's newest
+    if (!pose) {
       std::printf("generation=%llu no agent pose yet\n", static_cast<unsigned long long>(snapshot->generation()));
       continue;
     }
-    const ygg::NodeId pose = poses.back();  // ascending: the newest pose
-    const ygg::Points at = snapshot->points(pose);  // zero-copy into the snapshot
-    const ygg::Point p = at[0];
-    const auto room = snapshot->parent(pose);
+    const ygg::Point p{pose->position[0], pose->position[1], pose->position[2]};
+    const auto room = snapshot->room_of(p);  // the ROOMS node whose box holds it
     const auto nearest = snapshot->nearest_object(p);
     const auto within = snapshot->objects_within(p, 2.0f);
     std::string ids;
     for (auto id : within) ids += (ids.empty() ? "" : ",") + std::to_string(id);
     std::printf("generation=%llu pose=%llu at=%.2f,%.2f,%.2f room=%s nearest=%s within=%zu ids=%s boxes=%zu\n",
-                static_cast<unsigned long long>(snapshot->generation()), static_cast<unsigned long long>(pose), p[0], p[1],
+                static_cast<unsigned long long>(snapshot->generation()), static_cast<unsigned long long>(pose->node), p[0], p[1],
                 p[2], room ? std::to_string(*room).c_str() : "none",
                 nearest ? std::to_string(*nearest).c_str() : "none", within.size(), ids.empty() ? "none" : ids.c_str(),
                 snapshot->objects_with_label("box").size());

@@ -3,7 +3,9 @@
 
 use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use serde_json::Value;
+use ygg_dsg::objects::ObjectQuery;
 use ygg_store::query::Direction;
 use ygg_store::{FeatureRef, FeatureValue, Point, SceneView, Scope};
 
@@ -132,4 +134,60 @@ pub fn describe(obj: &Bound<'_, PyAny>) -> String {
         .unwrap_or_else(|_| "?".into());
     let repr: String = repr.chars().take(60).collect();
     format!("{kind} {repr}")
+}
+
+/// A query of the object contract from a dict (read directly into a JSON value, no text
+/// in between) or a JSON string, refused with the message `ygg query` gives for
+/// the same line.
+pub fn object_query(obj: &Bound<'_, PyAny>) -> PyResult<ObjectQuery> {
+    let parsed = match obj.cast::<PyString>() {
+        Ok(line) => ObjectQuery::from_json(&line.to_cow()?),
+        Err(_) => ObjectQuery::from_value(&json_value(obj, "query")?),
+    };
+    parsed.map_err(QueryError::new_err)
+}
+
+/// A Python value (dict with str keys, list, tuple, str, int, float, bool, None, or any
+/// number-like such as a numpy scalar) as a JSON value.
+fn json_value(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Value> {
+    let refuse = |why: &str| QueryError::new_err(format!("{what}: {why}, got {}", describe(obj)));
+    if obj.is_none() {
+        Ok(Value::Null)
+    } else if let Ok(b) = obj.cast::<PyBool>() {
+        Ok(Value::Bool(b.is_true()))
+    } else if let Ok(s) = obj.cast::<PyString>() {
+        Ok(Value::String(s.to_cow()?.into_owned()))
+    } else if let Ok(i) = obj.cast::<PyInt>() {
+        if let Ok(n) = i.extract::<i64>() {
+            Ok(Value::from(n))
+        } else if let Ok(n) = i.extract::<u64>() {
+            Ok(Value::from(n))
+        } else {
+            Ok(Value::from(i.extract::<f64>()?))
+        }
+    } else if let Ok(d) = obj.cast::<PyDict>() {
+        let mut map = serde_json::Map::new();
+        for (k, v) in d.iter() {
+            let key = k
+                .cast::<PyString>()
+                .map_err(|_| refuse("dict keys must be str"))?
+                .to_cow()?
+                .into_owned();
+            let value = json_value(&v, &format!("{what}[{key:?}]"))?;
+            map.insert(key, value);
+        }
+        Ok(Value::Object(map))
+    } else if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        obj.try_iter()?
+            .map(|item| json_value(&item?, what))
+            .collect::<PyResult<Vec<Value>>>()
+            .map(Value::Array)
+    } else if let Ok(x) = obj.extract::<f64>() {
+        // A float, or a number-like (a numpy scalar); JSON has no NaN or infinity.
+        serde_json::Number::from_f64(x)
+            .map(Value::Number)
+            .ok_or_else(|| refuse("expected a finite number"))
+    } else {
+        Err(refuse("expected a dict, list, str, number, bool or None"))
+    }
 }

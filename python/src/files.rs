@@ -8,7 +8,7 @@ use ygg_dsg::{ImportOptions, office};
 use ygg_store::{SceneGraph, SnapshotFile};
 
 use crate::errors::{FileError, QueryError, file_error};
-use crate::graph::PySceneGraph;
+use crate::graph_home::PySceneGraph;
 use crate::scene::Scene;
 use crate::snapshot::SnapshotSource;
 

@@ -1,6 +1,8 @@
 //! `yggdrasil.Node` and `yggdrasil.Layer`: one node or layer of a `Scene`, read from the
 //! snapshot on each access.
 
+use std::sync::Arc;
+
 use numpy::PyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -8,7 +10,8 @@ use ygg_store::{LayerId, NodeId, SceneView};
 
 use crate::convert::feature_to_py;
 use crate::errors::{unknown_layer, unknown_node};
-use crate::scene::Scene;
+use crate::points::{SnapshotOwner, points_array};
+use crate::snapshot::SnapshotView;
 
 /// An axis-aligned box as `((min_x, min_y, min_z), (max_x, max_y, max_z))`.
 type BoxTuple = ((f32, f32, f32), (f32, f32, f32));
@@ -16,26 +19,30 @@ type BoxTuple = ((f32, f32, f32), (f32, f32, f32));
 /// One node of a `Scene` (`scene.node(id)`); keeps the scene's snapshot alive.
 #[pyclass(frozen, module = "yggdrasil", name = "Node")]
 pub struct Node {
-    scene: Py<Scene>,
+    snapshot: Arc<SnapshotView>,
     id: NodeId,
 }
 
 impl Node {
-    /// The node `id` of `scene` (which must hold it).
-    pub fn new(scene: Py<Scene>, id: NodeId) -> Self {
-        Node { scene, id }
+    /// The node `id` of `snapshot` (which must hold it).
+    pub fn new(snapshot: Arc<SnapshotView>, id: NodeId) -> Self {
+        Node { snapshot, id }
     }
 
     /// Runs `f` on the scene's view and this node's handle.
     fn with<T>(
         &self,
-        py: Python<'_>,
         f: impl FnOnce(&ygg_store::ArchivedScene<'_>, ygg_store::snapshot::ArchivedNodeRef) -> T,
     ) -> PyResult<T> {
-        let scene = self.scene.bind(py).get();
-        let view = scene.snapshot().view();
+        let view = self.snapshot.view();
         let node = view.node(self.id).ok_or_else(|| unknown_node(self.id.0))?;
         Ok(f(view, node))
+    }
+}
+
+impl SnapshotOwner for Node {
+    fn snapshot(&self) -> &SnapshotView {
+        &self.snapshot
     }
 }
 
@@ -49,28 +56,26 @@ impl Node {
 
     /// The name of the node's layer.
     #[getter]
-    fn layer(&self, py: Python<'_>) -> PyResult<String> {
-        self.with(py, |v, n| {
-            v.layer_name(v.node_layer(n)).unwrap_or_default().to_owned()
-        })
+    fn layer(&self) -> PyResult<String> {
+        self.with(|v, n| v.layer_name(v.node_layer(n)).unwrap_or_default().to_owned())
     }
 
     /// The parent's id (`None` if the node is not nested).
     #[getter]
-    fn parent(&self, py: Python<'_>) -> PyResult<Option<u64>> {
-        self.with(py, |v, n| v.parent(n).map(|p| p.0))
+    fn parent(&self) -> PyResult<Option<u64>> {
+        self.with(|v, n| v.parent(n).map(|p| p.0))
     }
 
     /// The children's ids, ascending.
     #[getter]
-    fn children(&self, py: Python<'_>) -> PyResult<Vec<u64>> {
-        self.with(py, |v, n| v.children(n).map(|c| c.0).collect())
+    fn children(&self) -> PyResult<Vec<u64>> {
+        self.with(|v, n| v.children(n).map(|c| c.0).collect())
     }
 
     /// The node's labels, sorted.
     #[getter]
-    fn labels(&self, py: Python<'_>) -> PyResult<Vec<String>> {
-        self.with(py, |v, n| {
+    fn labels(&self) -> PyResult<Vec<String>> {
+        self.with(|v, n| {
             let mut labels: Vec<String> = v.labels(n).map(str::to_owned).collect();
             labels.sort_unstable();
             labels
@@ -81,7 +86,7 @@ impl Node {
     #[getter]
     fn features<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
-        self.with(py, |v, n| {
+        self.with(|v, n| {
             for (k, value) in v.features(n) {
                 out.set_item(k, feature_to_py(py, value)?)?;
             }
@@ -93,8 +98,8 @@ impl Node {
     /// The node's bounding box `((min), (max))` when it keeps one and its sub-tree has a
     /// point, else `None`.
     #[getter]
-    fn aabb(&self, py: Python<'_>) -> PyResult<Option<BoxTuple>> {
-        self.with(py, |v, n| {
+    fn aabb(&self) -> PyResult<Option<BoxTuple>> {
+        self.with(|v, n| {
             v.aabb(n).map(|b| {
                 (
                     (b.min[0], b.min[1], b.min[2]),
@@ -107,12 +112,12 @@ impl Node {
     /// The node's geometry: a read-only `(n, 3)` `float32` numpy array viewing the mapped
     /// snapshot (no copy). It keeps the snapshot alive for as long as it lives.
     #[getter]
-    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        crate::points::points_array(self.scene.bind(py), self.id)
+    fn points<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        points_array(slf, slf.get().id)
     }
 
-    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
-        let layer = self.layer(py)?;
+    fn __repr__(&self) -> PyResult<String> {
+        let layer = self.layer()?;
         Ok(format!("<yggdrasil.Node {} layer={layer:?}>", self.id.0))
     }
 }
@@ -120,23 +125,18 @@ impl Node {
 /// One layer of a `Scene` (`scene.layer(name)`).
 #[pyclass(frozen, module = "yggdrasil", name = "Layer")]
 pub struct Layer {
-    scene: Py<Scene>,
+    snapshot: Arc<SnapshotView>,
     id: LayerId,
 }
 
 impl Layer {
-    /// The layer called `name` of `scene`.
-    pub fn new(scene: &Bound<'_, Scene>, name: &str) -> PyResult<Self> {
-        let id = scene
-            .get()
-            .snapshot()
+    /// The layer called `name` of `snapshot`.
+    pub fn new(snapshot: Arc<SnapshotView>, name: &str) -> PyResult<Self> {
+        let id = snapshot
             .view()
             .layer_by_name(name)
             .ok_or_else(|| unknown_layer(name))?;
-        Ok(Layer {
-            scene: scene.clone().unbind(),
-            id,
-        })
+        Ok(Layer { snapshot, id })
     }
 
     fn names(v: &ygg_store::ArchivedScene<'_>, layers: Vec<LayerId>) -> Vec<String> {
@@ -157,28 +157,21 @@ impl Layer {
 
     /// The layer name.
     #[getter]
-    fn name(&self, py: Python<'_>) -> String {
-        let scene = self.scene.bind(py).get();
-        let v = scene.snapshot().view();
+    fn name(&self) -> String {
+        let v = self.snapshot.view();
         v.layer_name(self.id).unwrap_or_default().to_owned()
     }
 
     /// The layer's generation (changes whenever its content changes).
     #[getter]
-    fn generation(&self, py: Python<'_>) -> u64 {
-        let scene = self.scene.bind(py).get();
-        scene
-            .snapshot()
-            .view()
-            .layer_generation(self.id)
-            .unwrap_or(0)
+    fn generation(&self) -> u64 {
+        self.snapshot.view().layer_generation(self.id).unwrap_or(0)
     }
 
     /// The ids of the layer's nodes, ascending.
     #[getter]
-    fn nodes(&self, py: Python<'_>) -> Vec<u64> {
-        let scene = self.scene.bind(py).get();
-        let v = scene.snapshot().view();
+    fn nodes(&self) -> Vec<u64> {
+        let v = self.snapshot.view();
         let mut ids: Vec<u64> = v.layer_nodes(self.id).map(|n| v.node_id(n).0).collect();
         ids.sort_unstable();
         ids
@@ -186,30 +179,27 @@ impl Layer {
 
     /// Names of the layers this layer encompasses (its DAG children).
     #[getter]
-    fn children(&self, py: Python<'_>) -> Vec<String> {
-        let scene = self.scene.bind(py).get();
-        let v = scene.snapshot().view();
+    fn children(&self) -> Vec<String> {
+        let v = self.snapshot.view();
         Self::names(v, v.layer_children(self.id))
     }
 
     /// Names of the layers encompassing this layer (its DAG parents).
     #[getter]
-    fn parents(&self, py: Python<'_>) -> Vec<String> {
-        let scene = self.scene.bind(py).get();
-        let v = scene.snapshot().view();
+    fn parents(&self) -> Vec<String> {
+        let v = self.snapshot.view();
         Self::names(v, v.layer_parents(self.id))
     }
 
-    fn __len__(&self, py: Python<'_>) -> usize {
-        let scene = self.scene.bind(py).get();
-        scene.snapshot().view().layer_len(self.id)
+    fn __len__(&self) -> usize {
+        self.snapshot.view().layer_len(self.id)
     }
 
-    fn __repr__(&self, py: Python<'_>) -> String {
+    fn __repr__(&self) -> String {
         format!(
             "<yggdrasil.Layer {:?} nodes={}>",
-            self.name(py),
-            self.__len__(py)
+            self.name(),
+            self.__len__()
         )
     }
 }

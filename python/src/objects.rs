@@ -1,4 +1,4 @@
-//! `yggdrasil.ObjectQueries` (`scene.objects`): the object contract of `ygg-reader query`
+//! `yggdrasil.ObjectQueries` (`scene.objects`): the object contract of `ygg query`
 //! (`ygg_dsg::objects`), one query at a time or in batches without the GIL.
 
 use std::sync::Arc;
@@ -8,9 +8,9 @@ use pyo3::prelude::*;
 use ygg_dsg::objects::{ObjectQuery, ObjectQueryError};
 use ygg_store::NodeId;
 
+use crate::batch;
 use crate::convert::{point, points};
 use crate::errors::{QueryError, query_error};
-use crate::scene::NO_NODE;
 use crate::snapshot::ObjectCatalog;
 
 /// A ragged batch answer: `offsets` (n + 1, int64) into the concatenated `ids` (uint64);
@@ -34,7 +34,7 @@ fn ragged(py: Python<'_>, rows: Vec<Vec<NodeId>>) -> Ragged<'_> {
 
 /// The object queries of a scene (`scene.objects`, or `scene.objects_in(room)` for one
 /// sub-tree): answers are Spark-DSG object ids, ascending, the same on every layout, and
-/// exactly what `ygg-reader query` answers. The catalog of object layers is built once
+/// exactly what `ygg query` answers. The catalog of object layers is built once
 /// per scene and kept.
 #[pyclass(frozen, module = "yggdrasil", name = "ObjectQueries")]
 pub struct ObjectQueries {
@@ -47,11 +47,10 @@ impl ObjectQueries {
         ObjectQueries { catalog }
     }
 
-    /// The ids answering one JSON query line, as `ygg-reader query` answers it.
-    pub fn answer_line(&self, line: &str) -> PyResult<Vec<u64>> {
-        let q = ObjectQuery::from_json(line).map_err(QueryError::new_err)?;
+    /// The ids answering one query, as `ygg query` answers it.
+    pub fn answer(&self, q: &ObjectQuery) -> PyResult<Vec<u64>> {
         self.catalog
-            .with_dependent(|_, objects| objects.answer(&q))
+            .with_dependent(|_, objects| objects.answer(q))
             .map(ids)
             .map_err(|e| query_error(&e))
     }
@@ -68,12 +67,11 @@ impl ObjectQueries {
 
 #[pymethods]
 impl ObjectQueries {
-    /// The object with the vertex closest to `point` (ties to the smaller id), as a list
-    /// of at most one id.
-    fn nearest(&self, point: &Bound<'_, PyAny>) -> PyResult<Vec<u64>> {
+    /// The object with the vertex closest to `point` (ties to the smaller id), or `None`
+    /// when the scene has no object with a vertex.
+    fn nearest(&self, point: &Bound<'_, PyAny>) -> PyResult<Option<u64>> {
         let p = self::point(point, "point")?;
-        self.run(|o| o.nearest_object(p))
-            .map(|n| n.into_iter().map(|n| n.0).collect())
+        self.run(|o| o.nearest_object(p)).map(|n| n.map(|n| n.0))
     }
 
     /// Every object with a vertex at distance `<= radius` from `point`, ascending.
@@ -109,25 +107,21 @@ impl ObjectQueries {
             .with_dependent(|_, objects| ids(objects.objects()))
     }
 
-    /// `nearest` for each row of `points` (an `(n, 3)` array), without the GIL: a `uint64`
-    /// array of n ids (`NO_NODE` where there is no object).
+    /// `nearest` for each row of `points` (an `(n, 3)` array), without the GIL: an `int64`
+    /// array of n ids, `NO_NODE` (-1) where there is no object.
     fn nearest_many<'py>(
         &self,
         py: Python<'py>,
         points: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<u64>>> {
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let queries = self::points(points, "points")?;
         let catalog = Arc::clone(&self.catalog);
         let answers = py.detach(move || {
-            catalog.with_dependent(|_, objects| {
-                crate::batch::map(&queries, |p| {
-                    objects
-                        .nearest_object(*p)
-                        .map(|n| n.map_or(NO_NODE, |n| n.0))
-                })
-            })
+            catalog
+                .with_dependent(|_, objects| batch::map(&queries, |p| objects.nearest_object(*p)))
         });
-        Ok(answers.map_err(|e| query_error(&e))?.into_pyarray(py))
+        let found = answers.map_err(|e| query_error(&e))?;
+        Ok(batch::signed_ids(found)?.into_pyarray(py))
     }
 
     /// `within` for each row of `points` with one `radius`, without the GIL:
@@ -142,7 +136,7 @@ impl ObjectQueries {
         let catalog = Arc::clone(&self.catalog);
         let rows = py.detach(move || {
             catalog.with_dependent(|_, objects| {
-                crate::batch::map(&queries, |p| objects.objects_within(*p, radius))
+                batch::map(&queries, |p| objects.objects_within(*p, radius))
             })
         });
         Ok(ragged(py, rows.map_err(|e| query_error(&e))?))
@@ -171,7 +165,7 @@ impl ObjectQueries {
         let catalog = Arc::clone(&self.catalog);
         let rows = py.detach(move || {
             catalog.with_dependent(|_, objects| {
-                crate::batch::map(&views, |(eye, dir)| {
+                batch::map(&views, |(eye, dir)| {
                     objects.visible_objects(*eye, *dir, half_angle_deg, range)
                 })
             })

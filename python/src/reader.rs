@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use ygg_reader::{SceneReader, SceneSnapshot, WriterStatus};
 
 use crate::errors::{QueryError, TransportError, receive_error, transport_error};
-use crate::graph::lock;
+use crate::graph_home::lock;
 use crate::scene::Scene;
 use crate::snapshot::SnapshotSource;
 

@@ -6,21 +6,23 @@ use std::sync::Arc;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use ygg_store::query::{self, ConeView};
+use ygg_dsg::layout;
+use ygg_dsg::objects::cone_view;
+use ygg_store::query;
 use ygg_store::{EdgeRef, FeatureRef, FeatureValue, NodeId, SceneView};
 
+use crate::batch;
 use crate::convert::{self, direction, point, points, scope};
 use crate::errors::{query_error, unknown_node};
-use crate::graph::PySceneGraph;
+use crate::graph_home::PySceneGraph;
 use crate::node::{Layer, Node};
 use crate::objects::ObjectQueries;
 use crate::snapshot::{ObjectCatalog, SnapshotSource, SnapshotView};
+use crate::whereabouts::{AgentPose, RoomScope};
 
-/// The id reported by batch queries for "no node" (`2**64 - 1`, an id no node may have).
-pub const NO_NODE: u64 = u64::MAX;
-
-/// `nearest_nodes_many`'s answer: ids (`uint64`) and distances (`float32`).
-type NearestArrays<'py> = (Bound<'py, PyArray1<u64>>, Bound<'py, PyArray1<f32>>);
+/// `nearest_nodes_many`'s answer: ids (a masked `uint64` array, masked for none) and
+/// distances (`float32`, `inf` for none).
+type NearestArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyArray1<f32>>);
 
 /// An edge as Python sees it: `(source, target, description)`.
 type EdgeTuple = (u64, u64, String);
@@ -88,8 +90,8 @@ impl Scene {
     /// The layer called `name`.
     ///
     /// Raises `QueryError` if there is none.
-    fn layer(slf: &Bound<'_, Self>, name: &str) -> PyResult<Layer> {
-        Layer::new(slf, name)
+    fn layer(&self, name: &str) -> PyResult<Layer> {
+        Layer::new(Arc::clone(&self.snapshot), name)
     }
 
     /// Total number of nodes.
@@ -106,12 +108,12 @@ impl Scene {
     /// The node with this id.
     ///
     /// Raises `QueryError` if there is none.
-    fn node(slf: &Bound<'_, Self>, id: u64) -> PyResult<Node> {
-        slf.get().node_ref(id)?;
-        Ok(Node::new(slf.clone().unbind(), NodeId(id)))
+    fn node(&self, id: u64) -> PyResult<Node> {
+        self.node_ref(id)?;
+        Ok(Node::new(Arc::clone(&self.snapshot), NodeId(id)))
     }
 
-    /// The object queries of `ygg-reader query` over the whole scene (`scene.objects.nearest(p)`).
+    /// The object queries of `ygg query` over the whole scene (`scene.objects.nearest(p)`).
     #[getter]
     fn objects(&self) -> ObjectQueries {
         ObjectQueries::new(Arc::clone(&self.objects))
@@ -128,8 +130,9 @@ impl Scene {
         )))
     }
 
-    /// Answers one query of the `ygg-reader query` contract, given as a dict (or a JSON
-    /// string), exactly as the CLI answers the same line: `{"ids": [...]}`.
+    /// Answers one query of the `ygg query` contract, given as a dict (read
+    /// directly, no JSON encoding) or a JSON string, exactly as the CLI answers the same
+    /// line: `{"ids": [...]}`.
     ///
     /// `{"op": "nearest_object", "point": [x, y, z]}`,
     /// `{"op": "objects_within", "point": [x, y, z], "radius": r}`,
@@ -138,20 +141,8 @@ impl Scene {
     ///
     /// Raises `QueryError` with the CLI's message for a malformed query.
     fn query<'py>(&self, py: Python<'py>, q: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
-        let line: String = match q.extract::<String>() {
-            Ok(s) => s,
-            Err(_) => py
-                .import("json")?
-                .call_method1("dumps", (q,))
-                .map_err(|e| {
-                    crate::errors::QueryError::new_err(format!(
-                        "query: cannot encode {} as JSON: {e}",
-                        convert::describe(q)
-                    ))
-                })?
-                .extract()?,
-        };
-        let answer = ObjectQueries::new(Arc::clone(&self.objects)).answer_line(&line)?;
+        let query = convert::object_query(q)?;
+        let answer = ObjectQueries::new(Arc::clone(&self.objects)).answer(&query)?;
         let out = PyDict::new(py);
         out.set_item("ids", answer)?;
         Ok(out)
@@ -203,22 +194,24 @@ impl Scene {
     }
 
     /// Nodes in `root`'s sub-tree with a point inside the view cone (apex `eye`,
-    /// direction `dir`, `half_angle` in radians, `range` in metres; bounds inclusive).
+    /// direction `dir`, `half_angle_deg` in degrees in `[0, 180]` as everywhere in the
+    /// package, `range` in metres; bounds inclusive).
     fn visible(
         &self,
         root: u64,
         eye: &Bound<'_, PyAny>,
         dir: &Bound<'_, PyAny>,
-        half_angle: f32,
+        half_angle_deg: f32,
         range: f32,
     ) -> PyResult<Vec<u64>> {
         self.node_ref(root)?;
-        let cone = ConeView {
-            eye: point(eye, "eye")?,
-            dir: point(dir, "dir")?,
-            half_angle,
+        let cone = cone_view(
+            point(eye, "eye")?,
+            point(dir, "dir")?,
+            half_angle_deg,
             range,
-        };
+        )
+        .map_err(|e| query_error(&e))?;
         query::visible(self.snapshot.view(), NodeId(root), &cone)
             .map(ids)
             .map_err(|e| query_error(&e))
@@ -354,8 +347,9 @@ impl Scene {
     }
 
     /// `nearest_nodes(p, 1, layer)` for each row of `points` (an `(n, 3)` array), without
-    /// the GIL: `(ids, distances)` as `uint64` and `float32` arrays of length n
-    /// (`NO_NODE` and `inf` where the scope holds no point).
+    /// the GIL: `(ids, distances)` of length n, the ids a `numpy.ma` masked `uint64`
+    /// array (node ids use all 64 bits, so no id value can mean "none"), masked where the
+    /// scope holds no point, and the distances `float32`, `inf` there.
     #[pyo3(signature = (points, layer = None))]
     fn nearest_nodes_many<'py>(
         &self,
@@ -367,17 +361,47 @@ impl Scene {
         let scope = scope(self.snapshot.view(), layer)?;
         let snapshot = Arc::clone(&self.snapshot);
         let answers = py.detach(move || {
-            crate::batch::map(&queries, |c| {
+            batch::map(&queries, |c| {
                 query::nearest_nodes(snapshot.view(), scope, *c, 1).map(|found| {
                     found
                         .first()
-                        .map_or((NO_NODE, f32::INFINITY), |(n, d)| (n.0, *d))
+                        .map_or((None, f32::INFINITY), |&(n, d)| (Some(n), d))
                 })
             })
         });
         let answers = answers.map_err(|e| query_error(&e))?;
-        let (ids, dists): (Vec<u64>, Vec<f32>) = answers.into_iter().unzip();
-        Ok((ids.into_pyarray(py), dists.into_pyarray(py)))
+        let (ids, dists): (Vec<Option<NodeId>>, Vec<f32>) = answers.into_iter().unzip();
+        Ok((batch::masked_ids(py, &ids)?, dists.into_pyarray(py)))
+    }
+
+    /// The newest agent pose (the `AGENTS` layer's largest id with a point) and the pose
+    /// before it; `None` when the scene has no pose yet.
+    fn newest_pose(&self) -> Option<AgentPose> {
+        layout::newest_pose(self.snapshot.view()).map(AgentPose::from)
+    }
+
+    /// The room (a node of the `ROOMS` layer) whose box holds `point` in x and y (the
+    /// smallest id when several do), or `None`.
+    fn room_of(&self, point: &Bound<'_, PyAny>) -> PyResult<Option<u64>> {
+        let p = convert::point(point, "point")?;
+        Ok(layout::room_of(self.snapshot.view(), &p).map(|r| r.0))
+    }
+
+    /// Where `room`'s objects live in a per-room layout (chocolate, mint, saffron): its
+    /// mesh layer and claimed group node (`scene.objects_in(scope.claimed)` answers over
+    /// the room's objects); `None` in another layout or for an unknown room.
+    fn room_scope(&self, room: u64) -> Option<RoomScope> {
+        let v = self.snapshot.view();
+        layout::room_scope(v, NodeId(room)).map(|s| RoomScope::new(v, s))
+    }
+
+    /// The distinct parents of `nodes` (the objects owning mesh nodes), ascending; nodes
+    /// without a parent or not in the scene are left out.
+    fn owners(&self, nodes: Vec<u64>) -> Vec<u64> {
+        ids(layout::owners(
+            self.snapshot.view(),
+            nodes.into_iter().map(NodeId),
+        ))
     }
 
     fn __repr__(&self) -> String {

@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 use ygg_writer::SceneWriter;
 
 use crate::errors::{MutationError, TransportError, transport_error};
-use crate::graph::{GraphHome, PySceneGraph, SharedWriter, lock};
+use crate::graph_home::{GraphHome, PySceneGraph, SharedWriter, lock};
 
 /// Publishes a `SceneGraph` to readers in other processes through shared memory.
 ///

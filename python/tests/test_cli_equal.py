@@ -63,7 +63,7 @@ def test_every_op_answers_as_the_cli_does(office_dir, tmp_path, layout):
         assert scene.query(json.dumps(line)) == want
         o = scene.objects
         got = {
-            "nearest_object": lambda: o.nearest(line["point"]),
+            "nearest_object": lambda: [n for n in [o.nearest(line["point"])] if n is not None],
             "objects_within": lambda: o.within(line["point"], line["radius"]),
             "visible_objects": lambda: o.visible(line["eye"], line["dir"], line["half_angle_deg"], line["range"]),
             "objects_with_label": lambda: o.with_label(line["label"]),
@@ -84,8 +84,8 @@ def test_batch_queries_answer_as_single_ones(office_dir, layout):
     points = np.array([line["point"] for line in lines if line["op"] == "nearest_object"], dtype=np.float32)
     o = scene.objects
     ids = o.nearest_many(points)
-    assert ids.dtype == np.uint64 and ids.shape == (len(points),)
-    assert [[int(i)] for i in ids] == [o.nearest(p) for p in points]
+    assert ids.dtype == np.int64 and ids.shape == (len(points),)
+    assert [None if i == yggdrasil.NO_NODE else int(i) for i in ids] == [o.nearest(p) for p in points]
     offsets, flat = o.within_many(points, 1.0)
     assert [flat[offsets[i]:offsets[i + 1]].tolist() for i in range(len(points))] == [o.within(p, 1.0) for p in points]
     dirs = np.tile(np.array([[1.0, 0.2, 0.0]], dtype=np.float32), (len(points), 1))

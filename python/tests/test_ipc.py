@@ -21,7 +21,7 @@ def test_python_reader_follows_a_rust_writer(scene_name, procs):
             scene = reader.wait_next(10)
             assert scene is not None, "no snapshot within 10 s"
             generations.append(scene.generation)
-            assert scene.objects.nearest([5.0, 5.0, 1.0])
+            assert scene.objects.nearest([5.0, 5.0, 1.0]) is not None
             assert scene.query({"op": "objects_with_label", "label": "light"})["ids"] == \
                 scene.objects.with_label("light")
         assert generations == sorted(set(generations))
@@ -31,7 +31,7 @@ def test_python_reader_follows_a_rust_writer(scene_name, procs):
             for _ in range(50):
                 reader.wait_next(0.2)
         assert reader.writer_status == "gone"
-        assert scene.objects.nearest([5.0, 5.0, 1.0])  # the last snapshot stays usable
+        assert scene.objects.nearest([5.0, 5.0, 1.0]) is not None  # the last snapshot stays usable
 
 
 def test_rust_reader_follows_a_python_writer(scene_name, procs):

@@ -17,7 +17,42 @@ _Box = Tuple[Tuple[float, float, float], Tuple[float, float, float]]
 _Ragged = Tuple[npt.NDArray[np.int64], npt.NDArray[np.uint64]]
 
 NO_NODE: int
-"""The id batch queries report for "no node" (2**64 - 1)."""
+"""The id ``ObjectQueries.nearest_many`` (an ``int64`` array) holds for "no object": -1.
+Every Spark-DSG object id is below 2**63, so no id takes it; a larger id raises
+``QueryError``. ``Scene.nearest_nodes_many`` answers node ids, which use all 64 bits, as a
+masked ``uint64`` array instead."""
+
+def set_log_level(level: str) -> None:
+    """Sets how much the shared-memory transport (iceoryx2) prints on stderr, process-wide:
+    ``"trace"``, ``"debug"``, ``"info"``, ``"warn"``, ``"error"`` or ``"fatal"``. The package
+    sets ``"error"`` when it loads unless the environment variable ``YGG_LOG`` names another
+    level. Raises ``ValueError`` for an unknown name."""
+
+class AgentPose:
+    """The newest agent pose of a scene (``Scene.newest_pose()``)."""
+
+    @property
+    def node(self) -> int:
+        """The pose node: the largest id of the ``AGENTS`` layer with a point."""
+    @property
+    def position(self) -> Tuple[float, float, float]:
+        """Its position."""
+    @property
+    def previous(self) -> Tuple[float, float, float]:
+        """The previous pose's position (1 m behind along -x when there is one pose)."""
+    @property
+    def heading(self) -> Tuple[float, float, float]:
+        """The unit direction of travel (+x when ``previous == position``)."""
+
+class RoomScope:
+    """Where a room's objects live in a per-room layout (``Scene.room_scope(room)``)."""
+
+    @property
+    def mesh_layer(self) -> str:
+        """The room's claimed-mesh layer (its objects' mesh nodes)."""
+    @property
+    def claimed(self) -> int:
+        """The room's claimed group node: ``scene.objects_in(claimed)`` is the room's objects."""
 
 class Error(Exception):
     """Base class of every Yggdrasil error."""
@@ -60,7 +95,7 @@ class Scene:
         """Total number of nodes."""
     @property
     def objects(self) -> ObjectQueries:
-        """The object contract of ``ygg-reader query`` over the whole scene."""
+        """The object contract of ``ygg query`` over the whole scene."""
     def layer(self, name: str) -> Layer:
         """The layer called ``name``; raises ``QueryError``."""
     def has_node(self, id: int) -> bool:
@@ -70,15 +105,16 @@ class Scene:
     def objects_in(self, root: int) -> ObjectQueries:
         """The object queries restricted to ``root``'s sub-tree."""
     def query(self, q: Union[Mapping[str, Any], str]) -> Dict[str, List[int]]:
-        """One query of the ``ygg-reader query`` contract: ``{"ids": [...]}``; raises ``QueryError``."""
+        """One query of the ``ygg query`` contract, a dict (read directly) or a JSON
+        line: ``{"ids": [...]}``; raises ``QueryError`` with the CLI's message."""
     def nearest_nodes(self, point: _Point, m: int = 1, layer: Optional[str] = None) -> List[Tuple[int, float]]:
         """At most ``m`` ``(id, distance)`` pairs, nearest first."""
     def nodes_within_radius(self, point: _Point, radius: float, layer: Optional[str] = None) -> List[int]:
         """Nodes with a point at distance ``<= radius``, ascending."""
     def nearest_in_subtree(self, root: int, point: _Point, m: int = 1) -> List[Tuple[int, float]]:
         """Like ``nearest_nodes`` within ``root``'s sub-tree."""
-    def visible(self, root: int, eye: _Point, dir: _Point, half_angle: float, range: float) -> List[int]:
-        """Nodes in ``root``'s sub-tree with a point in the cone (half-angle in radians)."""
+    def visible(self, root: int, eye: _Point, dir: _Point, half_angle_deg: float, range: float) -> List[int]:
+        """Nodes in ``root``'s sub-tree with a point in the cone (half-angle in degrees, ``[0, 180]``)."""
     def nodes_with_label(self, label: str, layer: Optional[str] = None) -> List[int]:
         """Nodes carrying ``label``, ascending."""
     def nodes_matching(self, features: Mapping[str, _FeatureValue], layer: Optional[str] = None) -> List[int]:
@@ -107,8 +143,18 @@ class Scene:
         """Fewest-edges path, both ends included, or ``None``."""
     def nearest_nodes_many(
         self, points: _Points, layer: Optional[str] = None
-    ) -> Tuple[npt.NDArray[np.uint64], npt.NDArray[np.float32]]:
-        """``nearest_nodes(p, 1)`` per row, without the GIL: ``(ids, distances)``."""
+    ) -> Tuple[np.ma.MaskedArray[Any, np.dtype[np.uint64]], npt.NDArray[np.float32]]:
+        """``nearest_nodes(p, 1)`` per row, without the GIL: ``(ids, distances)``, the ids a
+        masked ``uint64`` array (node ids use all 64 bits), masked where the scope holds no
+        point, the distances ``inf`` there."""
+    def newest_pose(self) -> Optional[AgentPose]:
+        """The newest agent pose, or ``None`` before the first one."""
+    def room_of(self, point: _Point) -> Optional[int]:
+        """The room whose box holds ``point`` in x and y (smallest id), or ``None``."""
+    def room_scope(self, room: int) -> Optional[RoomScope]:
+        """Where ``room``'s objects live (per-room layouts), or ``None``."""
+    def owners(self, nodes: Sequence[int]) -> List[int]:
+        """The distinct parents of ``nodes`` (objects owning mesh nodes), ascending."""
 
 class Node:
     """One node of a ``Scene``."""
@@ -162,20 +208,20 @@ class Layer:
     def __len__(self) -> int: ...
 
 class ObjectQueries:
-    """The object contract of ``ygg-reader query``: Spark-DSG object ids, ascending."""
+    """The object contract of ``ygg query``: Spark-DSG object ids, ascending."""
 
-    def nearest(self, point: _Point) -> List[int]:
-        """The object with the closest vertex (at most one id)."""
+    def nearest(self, point: _Point) -> Optional[int]:
+        """The object with the closest vertex (ties to the smaller id), or ``None``."""
     def within(self, point: _Point, radius: float) -> List[int]:
         """Objects with a vertex at distance ``<= radius``."""
     def visible(self, eye: _Point, dir: _Point, half_angle_deg: float, range: float) -> List[int]:
-        """Objects with a vertex in the view cone."""
+        """Objects with a vertex in the view cone (half-angle in degrees, ``[0, 180]``)."""
     def with_label(self, label: str) -> List[int]:
         """Objects carrying ``label``."""
     def ids(self) -> List[int]:
         """Every object node of the catalog."""
-    def nearest_many(self, points: _Points) -> npt.NDArray[np.uint64]:
-        """``nearest`` per row, without the GIL (``NO_NODE`` for none)."""
+    def nearest_many(self, points: _Points) -> npt.NDArray[np.int64]:
+        """``nearest`` per row, without the GIL: ``int64`` ids, ``NO_NODE`` (-1) for none."""
     def within_many(self, points: _Points, radius: float) -> _Ragged:
         """``within`` per row, without the GIL: ``(offsets, ids)``."""
     def visible_many(self, eyes: _Points, dirs: _Points, half_angle_deg: float, range: float) -> _Ragged:

@@ -6,12 +6,24 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
+use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
     SegmentBytes, is_chunk_segment_id, is_tree_chunk_segment_id, validate_chunk, validate_layer,
     validate_manifest, validate_tree_chunk,
 };
 use ygg_transport::ManifestEntry;
-use ygg_transport::protocol::decode_manifest_prefix;
+use ygg_transport::protocol::{SegmentError, decode_manifest_prefix};
+
+/// A received segment or manifest that is not valid; the assembler keeps nothing of it.
+#[derive(Debug, thiserror::Error)]
+pub enum AssembleError {
+    /// The store's validation refused the bytes.
+    #[error(transparent)]
+    Snapshot(#[from] SnapshotError),
+    /// The manifest's transport prefix is malformed.
+    #[error(transparent)]
+    ManifestPrefix(#[from] SegmentError),
+}
 
 /// Generations kept per segment id beyond the ones the last cut named (segments of a cut
 /// that is still arriving).
@@ -78,17 +90,17 @@ impl Assembler {
         id: u32,
         generation: u64,
         bytes: SegmentBytes,
-    ) -> Result<(), String> {
+    ) -> Result<(), AssembleError> {
         if self.segments.contains_key(&(session, id, generation)) {
             return Ok(());
         }
         let what = format!("segment {id} generation {generation}");
         if is_tree_chunk_segment_id(id) {
-            validate_tree_chunk(&bytes, &what).map_err(|e| e.to_string())?;
+            validate_tree_chunk(&bytes, &what)?;
         } else if is_chunk_segment_id(id) {
-            validate_chunk(&bytes, &what).map_err(|e| e.to_string())?;
+            validate_chunk(&bytes, &what)?;
         } else {
-            validate_layer(&bytes, &what).map_err(|e| e.to_string())?;
+            validate_layer(&bytes, &what)?;
         }
         self.segments
             .insert((session, id, generation), Arc::new(bytes));
@@ -118,19 +130,18 @@ impl Assembler {
         session: u64,
         generation: u64,
         bytes: SegmentBytes,
-    ) -> Result<bool, String> {
+    ) -> Result<bool, AssembleError> {
         let newer =
             |known: Option<(u64, u64)>| known.is_none_or(|(s, g)| s != session || generation > g);
         let pending = self.pending.as_ref().map(|m| (m.session, m.generation));
         if !newer(self.last) || !newer(pending) {
             return Ok(false);
         }
-        let (entries, offset) = decode_manifest_prefix(&bytes).map_err(|e| e.to_string())?;
+        let (entries, offset) = decode_manifest_prefix(&bytes)?;
         validate_manifest(
             &bytes[offset..],
             &format!("manifest generation {generation}"),
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         self.pending = Some(ManifestPayload {
             session,
             generation,

@@ -14,8 +14,49 @@ use zenoh::liveliness::LivelinessToken;
 use zenoh::qos::CongestionControl;
 use zenoh::query::Query;
 
-use crate::keys::{DataKey, Item, SceneKeys};
-use crate::network::NetworkArgs;
+use crate::keys::{DataKey, Item, SceneArgsError, SceneKeys, scene_keys};
+use crate::network::{NetworkArgs, SessionCloseError, SessionOpenError, close};
+
+/// Why the exporter stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// `--scene` or `--key` is invalid.
+    #[error(transparent)]
+    Args(#[from] SceneArgsError),
+    /// The Zenoh session could not be opened.
+    #[error(transparent)]
+    Session(#[from] SessionOpenError),
+    /// The queryable answering importers' snapshot queries could not be declared.
+    #[error("cannot declare the queryable on {key}: {source}")]
+    Queryable {
+        /// Its key expression.
+        key: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// The local scene cannot be followed (other than "no writer yet").
+    #[error("cannot follow scene {scene:?}: {source}")]
+    Follow {
+        /// The local scene.
+        scene: String,
+        /// The transport's reason.
+        source: ReaderOpenError,
+    },
+    /// A segment or manifest could not be put.
+    #[error("zenoh put on {key}: {source}")]
+    Put {
+        /// Its key.
+        key: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// The liveliness token could not be declared.
+    #[error("cannot declare the liveliness token: {0}")]
+    Token(#[source] zenoh::Error),
+    /// The session did not close cleanly.
+    #[error(transparent)]
+    Close(#[from] SessionCloseError),
+}
 
 /// Arguments of `ygg-relay export`.
 #[derive(Args, Debug)]
@@ -38,10 +79,8 @@ const POLL: Duration = Duration::from_millis(100);
 ///
 /// # Errors
 /// Bad arguments, a Zenoh session that cannot open, or a local reader that cannot be set up.
-pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
-    ygg_transport::service::SceneServices::new(&args.scene)
-        .map_err(|e| format!("--scene {:?}: {e}", args.scene))?;
-    let keys = SceneKeys::new(&args.key).map_err(|e| format!("--key: {e}"))?;
+pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), ExportError> {
+    let keys = scene_keys(&args.scene, &args.key)?;
     let session = args.network.open()?;
     let current: Arc<Mutex<Option<Arc<Snapshot>>>> = Arc::default();
     let answer_keys = keys.clone();
@@ -50,7 +89,10 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
         .declare_queryable(keys.all())
         .callback(move |query| answer(&query, &answer_keys, &answer_current))
         .wait()
-        .map_err(|e| format!("cannot declare the queryable on {}: {e}", keys.all()))?;
+        .map_err(|source| ExportError::Queryable {
+            key: keys.all(),
+            source,
+        })?;
     println!("exporting scene={} key={}", args.scene, keys.base());
 
     let mut exporter = Exporter {
@@ -63,7 +105,7 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
     // The reader picks up a restarted writer by itself; only the first one is waited for.
     let mut reader = loop {
         if stop.load(Ordering::Relaxed) {
-            return close(&session);
+            return Ok(close(&session)?);
         }
         match SubscriberBuilder::new(&args.scene)
             .wait_for_writer(POLL)
@@ -71,7 +113,12 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
         {
             Ok(reader) => break reader,
             Err(ReaderOpenError::NoWriter { .. }) => {}
-            Err(e) => return Err(format!("cannot follow scene {:?}: {e}", args.scene)),
+            Err(source) => {
+                return Err(ExportError::Follow {
+                    scene: args.scene.clone(),
+                    source,
+                });
+            }
         }
     };
     while !stop.load(Ordering::Relaxed) {
@@ -83,15 +130,7 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), String> {
         }
     }
     exporter.writer_gone();
-    close(&session)
-}
-
-/// Closes the Zenoh session (peers see the liveliness token go at once).
-fn close(session: &zenoh::Session) -> Result<(), String> {
-    session
-        .close()
-        .wait()
-        .map_err(|e| format!("closing the zenoh session: {e}"))
+    Ok(close(&session)?)
 }
 
 /// The exporter's state between snapshots.
@@ -107,7 +146,7 @@ struct Exporter<'a> {
 
 impl Exporter<'_> {
     /// Puts the segments of `snapshot` not put before, then its manifest.
-    fn send(&mut self, snapshot: &Arc<Snapshot>) -> Result<(), String> {
+    fn send(&mut self, snapshot: &Arc<Snapshot>) -> Result<(), ExportError> {
         let session = snapshot.session();
         let mut segments = 0usize;
         let mut bytes = 0usize;
@@ -146,7 +185,7 @@ impl Exporter<'_> {
                 .liveliness()
                 .declare_token(self.keys.alive())
                 .wait()
-                .map_err(|e| format!("cannot declare the liveliness token: {e}"))?;
+                .map_err(ExportError::Token)?;
             self.token = Some(token);
         }
         println!(
@@ -173,13 +212,16 @@ impl Exporter<'_> {
 /// Express: sent at once rather than held for Zenoh's batching (a segment is already large
 /// and its manifest follows it). Measured (`ygg-bench remote`, same window, quiet host): one-
 /// pose update p50 1.36-1.44 ms (three runs) against 1.87 ms batched, p99 2.2-2.5 against 4.0.
-fn put(session: &zenoh::Session, key: &str, payload: Vec<u8>) -> Result<(), String> {
+fn put(session: &zenoh::Session, key: &str, payload: Vec<u8>) -> Result<(), ExportError> {
     session
         .put(key, payload)
         .congestion_control(CongestionControl::Block)
         .express(true)
         .wait()
-        .map_err(|e| format!("zenoh put on {key}: {e}"))
+        .map_err(|source| ExportError::Put {
+            key: key.to_owned(),
+            source,
+        })
 }
 
 /// The manifest payload as it travels in shared memory: the transport prefix naming every

@@ -10,15 +10,72 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use ygg_store::snapshot::SegmentBytes;
 use ygg_transport::service::{DEFAULT_MAX_READERS, DEFAULT_MAX_SEGMENTS};
-use ygg_transport::{PublisherBuilder, SegmentPublisher};
+use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
 use zenoh::Wait as _;
 use zenoh::bytes::ZBytes;
 use zenoh::query::ConsolidationMode;
 use zenoh::sample::{Sample, SampleKind};
 
 use crate::cut::{Assembler, Cut};
-use crate::keys::{Item, SceneKeys};
-use crate::network::NetworkArgs;
+use crate::keys::{Item, SceneArgsError, SceneKeys, scene_keys};
+use crate::network::{NetworkArgs, SessionCloseError, SessionOpenError, close};
+
+/// Why the importer stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// `--scene` or `--key` is invalid.
+    #[error(transparent)]
+    Args(#[from] SceneArgsError),
+    /// The Zenoh session could not be opened.
+    #[error(transparent)]
+    Session(#[from] SessionOpenError),
+    /// The subscriber of the scene's data could not be declared.
+    #[error("cannot subscribe to {key}: {source}")]
+    Subscribe {
+        /// Its key expression.
+        key: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// The exporter's liveliness cannot be followed.
+    #[error("cannot follow the liveliness of {key}: {source}")]
+    Liveliness {
+        /// The liveliness key.
+        key: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// Zenoh dropped the callbacks that feed the importer.
+    #[error("the zenoh callbacks stopped")]
+    CallbacksStopped,
+    /// The local scene cannot be published (another writer on this host serves it, say).
+    #[error("cannot publish scene {scene:?}: {source}")]
+    Publish {
+        /// The local scene.
+        scene: String,
+        /// The transport's reason.
+        source: WriterCreateError,
+    },
+    /// A segment could not be republished.
+    #[error("publishing segment {id}: {source}")]
+    Segment {
+        /// Its id.
+        id: u32,
+        /// The transport's reason.
+        source: PublishError,
+    },
+    /// A manifest could not be republished.
+    #[error("publishing manifest {generation}: {source}")]
+    Manifest {
+        /// Its generation.
+        generation: u64,
+        /// The transport's reason.
+        source: PublishError,
+    },
+    /// The session did not close cleanly.
+    #[error(transparent)]
+    Close(#[from] SessionCloseError),
+}
 
 /// Arguments of `ygg-relay import`.
 #[derive(Args, Debug)]
@@ -63,10 +120,8 @@ enum Event {
 /// # Errors
 /// Bad arguments, a Zenoh session that cannot open, or a local scene that cannot be
 /// published (for example one another writer on this host publishes).
-pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
-    ygg_transport::service::SceneServices::new(&args.scene)
-        .map_err(|e| format!("--scene {:?}: {e}", args.scene))?;
-    let keys = SceneKeys::new(&args.key).map_err(|e| format!("--key: {e}"))?;
+pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), ImportError> {
+    let keys = scene_keys(&args.scene, &args.key)?;
     let session = args.network.open()?;
     let (tx, rx) = mpsc::channel();
     let data_tx = tx.clone();
@@ -76,7 +131,10 @@ pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
             let _ = data_tx.send(Event::Data(sample));
         })
         .wait()
-        .map_err(|e| format!("cannot subscribe to {}: {e}", keys.all()))?;
+        .map_err(|source| ImportError::Subscribe {
+            key: keys.all(),
+            source,
+        })?;
     let alive_tx = tx.clone();
     let _alive = session
         .liveliness()
@@ -86,7 +144,10 @@ pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
             let _ = alive_tx.send(Event::Alive(sample.kind() == SampleKind::Put));
         })
         .wait()
-        .map_err(|e| format!("cannot follow the liveliness of {}: {e}", keys.alive()))?;
+        .map_err(|source| ImportError::Liveliness {
+            key: keys.alive(),
+            source,
+        })?;
     println!("importing key={} scene={}", keys.base(), args.scene);
 
     let mut importer = Importer {
@@ -114,7 +175,7 @@ pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
                 Ok(())
             }
             Err(RecvTimeoutError::Timeout) => importer.retry_gap(),
-            Err(RecvTimeoutError::Disconnected) => Err("the zenoh callbacks stopped".into()),
+            Err(RecvTimeoutError::Disconnected) => Err(ImportError::CallbacksStopped),
         };
         if let Err(e) = step {
             break Err(e);
@@ -122,10 +183,7 @@ pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), String> {
     };
     importer.remote_gone();
     drop(importer);
-    session
-        .close()
-        .wait()
-        .map_err(|e| format!("closing the zenoh session: {e}"))?;
+    close(&session)?;
     result
 }
 
@@ -154,7 +212,7 @@ struct Importer<'a> {
 impl Importer<'_> {
     /// Validates and keeps one received payload, and republishes the cut it completes.
     /// Anything that is not a valid segment or manifest of this scene is logged and dropped.
-    fn receive(&mut self, sample: &Sample) -> Result<(), String> {
+    fn receive(&mut self, sample: &Sample) -> Result<(), ImportError> {
         let key = sample.key_expr().as_str();
         if sample.kind() != SampleKind::Put {
             return Ok(());
@@ -162,7 +220,7 @@ impl Importer<'_> {
         let parsed = match self.keys.parse(key) {
             Ok(parsed) => parsed,
             Err(reason) => {
-                dropped(key, &reason);
+                dropped(key, reason);
                 return Ok(());
             }
         };
@@ -178,7 +236,7 @@ impl Importer<'_> {
                 .map(|_| ()),
         };
         if let Err(reason) = kept {
-            dropped(key, &reason);
+            dropped(key, reason);
             return Ok(());
         }
         match self.assembler.take_cut() {
@@ -190,7 +248,7 @@ impl Importer<'_> {
 
     /// Asks for the snapshot while the newest manifest lacks segments (at most every
     /// [`QUERY_INTERVAL`]).
-    fn retry_gap(&mut self) -> Result<(), String> {
+    fn retry_gap(&mut self) -> Result<(), ImportError> {
         let missing = self.assembler.missing();
         if let Some(first) = missing.first() {
             self.request(&format!(
@@ -245,7 +303,7 @@ impl Importer<'_> {
 
     /// Republishes a complete cut: the segments whose generation changed, segments no
     /// longer named retired, then the manifest.
-    fn publish(&mut self, cut: &Cut) -> Result<(), String> {
+    fn publish(&mut self, cut: &Cut) -> Result<(), ImportError> {
         let manifest = &cut.manifest;
         if self
             .local
@@ -262,7 +320,10 @@ impl Importer<'_> {
                     .max_readers(self.args.max_readers)
                     .max_segments(self.args.max_layers)
                     .create()
-                    .map_err(|e| format!("cannot publish scene {:?}: {e}", self.args.scene))?;
+                    .map_err(|source| ImportError::Publish {
+                        scene: self.args.scene.clone(),
+                        source,
+                    })?;
                 self.local.insert(Local {
                     publisher,
                     remote_session: manifest.session,
@@ -281,7 +342,10 @@ impl Importer<'_> {
                 .publish_layer(entry.layer_id, entry.generation, bytes.len(), |buf| {
                     buf.copy_from_slice(bytes)
                 })
-                .map_err(|e| format!("publishing segment {}: {e}", entry.layer_id))?;
+                .map_err(|source| ImportError::Segment {
+                    id: entry.layer_id,
+                    source,
+                })?;
             sent += 1;
         }
         let store = manifest.store_bytes();
@@ -290,7 +354,10 @@ impl Importer<'_> {
             .publish_manifest(manifest.generation, &manifest.entries, store.len(), |buf| {
                 buf.copy_from_slice(store)
             })
-            .map_err(|e| format!("publishing manifest {}: {e}", manifest.generation))?;
+            .map_err(|source| ImportError::Manifest {
+                generation: manifest.generation,
+                source,
+            })?;
         let named: BTreeSet<u32> = manifest.entries.iter().map(|e| e.layer_id).collect();
         for gone in local.ids.difference(&named) {
             local.publisher.retire_layer(*gone);
@@ -307,7 +374,7 @@ impl Importer<'_> {
 }
 
 /// Logs a payload that is dropped and why.
-fn dropped(key: &str, reason: &str) {
+fn dropped(key: &str, reason: impl std::fmt::Display) {
     eprintln!("ygg-relay import: dropped {key}: {reason}");
     println!("dropped key={key}");
 }

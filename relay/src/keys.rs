@@ -46,19 +46,20 @@ impl SceneKeys {
     /// Keys under `base`, which must be a plain Zenoh key (no wildcard, no empty chunk).
     ///
     /// # Errors
-    /// A message saying what is wrong with `base`.
-    pub fn new(base: &str) -> Result<Self, String> {
+    /// [`KeyBaseError`] saying what is wrong with `base`.
+    pub fn new(base: &str) -> Result<Self, KeyBaseError> {
         let base = base.trim_end_matches('/');
         if base.is_empty() {
-            return Err("the key is empty".into());
+            return Err(KeyBaseError::Empty);
         }
         if let Some(bad) = base
             .split('/')
             .find(|c| c.is_empty() || c.contains(['*', '$', '?', '#']))
         {
-            return Err(format!(
-                "the key {base:?} has the chunk {bad:?}: use plain non-empty chunks separated by '/' (no '*', '$', '?', '#')"
-            ));
+            return Err(KeyBaseError::BadChunk {
+                base: base.to_owned(),
+                chunk: bad.to_owned(),
+            });
         }
         Ok(Self {
             base: base.to_owned(),
@@ -95,38 +96,134 @@ impl SceneKeys {
     /// Parses a data key received under [`all`](Self::all).
     ///
     /// # Errors
-    /// A message saying why `key` is not a data key of this scene.
-    pub fn parse(&self, key: &str) -> Result<DataKey, String> {
+    /// [`DataKeyParseError`] saying why `key` is not a data key of this scene.
+    pub fn parse(&self, key: &str) -> Result<DataKey, DataKeyParseError> {
+        let owned = || key.to_owned();
         let rest = key
             .strip_prefix(&self.base)
             .and_then(|r| r.strip_prefix('/'))
-            .ok_or_else(|| format!("{key:?} is not under {:?}", self.base))?;
+            .ok_or_else(|| DataKeyParseError::NotUnder {
+                key: owned(),
+                base: self.base.clone(),
+            })?;
         let chunks: Vec<&str> = rest.split('/').collect();
         let [session, what, generation] = chunks[..] else {
-            return Err(format!(
-                "{key:?}: expected <base>/<session>/<segment|manifest>/<generation>"
-            ));
+            return Err(DataKeyParseError::Shape { key: owned() });
+        };
+        let bad_session = || DataKeyParseError::Session {
+            key: owned(),
+            session: session.to_owned(),
         };
         if session.len() != 16 {
-            return Err(format!(
-                "{key:?}: the session {session:?} is not 16 hex digits"
-            ));
+            return Err(bad_session());
         }
-        let session = u64::from_str_radix(session, 16)
-            .map_err(|_| format!("{key:?}: the session {session:?} is not 16 hex digits"))?;
+        let session = u64::from_str_radix(session, 16).map_err(|_| bad_session())?;
         let generation: u64 = generation
             .parse()
-            .map_err(|_| format!("{key:?}: the generation {generation:?} is not a number"))?;
+            .map_err(|_| DataKeyParseError::Generation {
+                key: owned(),
+                generation: generation.to_owned(),
+            })?;
         let item = if what == "manifest" {
             Item::Manifest { generation }
         } else {
-            let id = what.parse().map_err(|_| {
-                format!("{key:?}: {what:?} is neither \"manifest\" nor a segment id")
+            let id = what.parse().map_err(|_| DataKeyParseError::Item {
+                key: owned(),
+                what: what.to_owned(),
             })?;
             Item::Segment { id, generation }
         };
         Ok(DataKey { session, item })
     }
+}
+
+/// The keys of `--key` for the local scene `--scene`, both checked.
+///
+/// # Errors
+/// [`SceneArgsError`] naming the option that is wrong.
+pub fn scene_keys(scene: &str, key: &str) -> Result<SceneKeys, SceneArgsError> {
+    ygg_transport::service::SceneServices::new(scene).map_err(|source| SceneArgsError::Scene {
+        scene: scene.to_owned(),
+        source,
+    })?;
+    SceneKeys::new(key).map_err(SceneArgsError::Key)
+}
+
+/// `--scene` or `--key` cannot name a relayed scene.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SceneArgsError {
+    /// The local scene name is invalid.
+    #[error("--scene {scene:?}: {source}")]
+    Scene {
+        /// The name given.
+        scene: String,
+        /// Why it cannot name services.
+        source: ygg_transport::service::SceneNameError,
+    },
+    /// The base key is invalid.
+    #[error("--key: {0}")]
+    Key(#[source] KeyBaseError),
+}
+
+/// A base key that cannot carry a scene (`--key`).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum KeyBaseError {
+    /// Nothing but slashes.
+    #[error("the key is empty")]
+    Empty,
+    /// An empty chunk or one with a wildcard or special character.
+    #[error(
+        "the key {base:?} has the chunk {chunk:?}: use plain non-empty chunks separated by '/' (no '*', '$', '?', '#')"
+    )]
+    BadChunk {
+        /// The base key.
+        base: String,
+        /// Its offending chunk.
+        chunk: String,
+    },
+}
+
+/// A received key that is not a data key of this scene.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum DataKeyParseError {
+    /// Another scene's key (or none of ours).
+    #[error("{key:?} is not under {base:?}")]
+    NotUnder {
+        /// The key received.
+        key: String,
+        /// This scene's base key.
+        base: String,
+    },
+    /// Not `<base>/<session>/<segment|manifest>/<generation>`.
+    #[error("{key:?}: expected <base>/<session>/<segment|manifest>/<generation>")]
+    Shape {
+        /// The key received.
+        key: String,
+    },
+    /// The session chunk is not 16 hex digits.
+    #[error("{key:?}: the session {session:?} is not 16 hex digits")]
+    Session {
+        /// The key received.
+        key: String,
+        /// Its session chunk.
+        session: String,
+    },
+    /// The generation chunk is not a number.
+    #[error("{key:?}: the generation {generation:?} is not a number")]
+    Generation {
+        /// The key received.
+        key: String,
+        /// Its generation chunk.
+        generation: String,
+    },
+    /// The item chunk is neither `manifest` nor a segment id.
+    #[error("{key:?}: {what:?} is neither \"manifest\" nor a segment id")]
+    Item {
+        /// The key received.
+        key: String,
+        /// Its item chunk.
+        what: String,
+    },
 }
 
 #[cfg(test)]
@@ -168,7 +265,7 @@ mod tests {
             ("robots/r1/office/0000000000000001/x/1", "neither"),
             ("robots/r1/office/0000000000000001/1/-1", "not a number"),
         ] {
-            let err = keys.parse(key).expect_err(key);
+            let err = keys.parse(key).expect_err(key).to_string();
             assert!(err.contains(says), "{key}: {err}");
         }
     }

@@ -60,10 +60,10 @@ fn main() -> ExitCode {
         eprintln!("ygg-relay: error: cannot install the signal handler: {e}");
         return ExitCode::FAILURE;
     }
-    let result = match &cli.command {
-        Command::Export(args) => export::run(args, &stop),
-        Command::Import(args) => import::run(args, &stop),
-        Command::Put(args) => put::run(args),
+    let result: Result<(), Box<dyn std::error::Error>> = match &cli.command {
+        Command::Export(args) => export::run(args, &stop).map_err(Into::into),
+        Command::Import(args) => import::run(args, &stop).map_err(Into::into),
+        Command::Put(args) => put::run(args).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use zenoh::Wait as _;
 
 /// Reconnection settings a relay uses where its `--zenoh-config` file keeps Zenoh's defaults:
 /// retry every 100-250 ms (the default backs off to 4 s), keep retrying for good, and give
@@ -56,17 +57,18 @@ impl NetworkArgs {
     /// off: a relay talks only to the endpoints it is given.
     ///
     /// # Errors
-    /// A message naming the option or file Zenoh rejected.
-    pub fn config(&self) -> Result<zenoh::Config, String> {
+    /// [`NetworkConfigError`] naming the option or file Zenoh rejected.
+    pub fn config(&self) -> Result<zenoh::Config, NetworkConfigError> {
         if self.connect.is_empty() && self.listen.is_empty() {
-            return Err(
-                "give at least one --connect or --listen endpoint (e.g. --listen tcp/10.0.0.1:7447)"
-                    .into(),
-            );
+            return Err(NetworkConfigError::NoEndpoint);
         }
         let mut config = match &self.zenoh_config {
-            Some(path) => zenoh::Config::from_file(path)
-                .map_err(|e| format!("--zenoh-config {}: {e}", path.display()))?,
+            Some(path) => {
+                zenoh::Config::from_file(path).map_err(|source| NetworkConfigError::ConfigFile {
+                    path: path.clone(),
+                    source,
+                })?
+            }
             None => zenoh::Config::default(),
         };
         let json = |values: &[String]| {
@@ -87,9 +89,14 @@ impl NetworkArgs {
             if value == "[]" {
                 continue;
             }
-            config
-                .insert_json5(key, &value)
-                .map_err(|e| format!("{option}: zenoh refused {key} = {value}: {e}"))?;
+            config.insert_json5(key, &value).map_err(|source| {
+                NetworkConfigError::OptionRefused {
+                    option,
+                    key,
+                    value: value.clone(),
+                    source,
+                }
+            })?;
         }
         // Tuned for healing a link within about a second, where the file keeps Zenoh's default.
         let defaults = zenoh::Config::default();
@@ -100,9 +107,13 @@ impl NetworkArgs {
             .chain([(BLOCK_LIMIT, block_limit.as_str())]);
         for (key, value) in tuned {
             if config.get_json(key).ok() == defaults.get_json(key).ok() {
-                config
-                    .insert_json5(key, value)
-                    .map_err(|e| format!("zenoh refused {key} = {value}: {e}"))?;
+                config.insert_json5(key, value).map_err(|source| {
+                    NetworkConfigError::TuningRefused {
+                        key,
+                        value: value.to_owned(),
+                        source,
+                    }
+                })?;
             }
         }
         Ok(config)
@@ -111,16 +122,75 @@ impl NetworkArgs {
     /// Opens the Zenoh session.
     ///
     /// # Errors
-    /// A message naming the configuration problem or why Zenoh could not start (for
+    /// [`SessionOpenError`]: the configuration problem or why Zenoh could not start (for
     /// example a `--listen` address this host does not have).
-    pub fn open(&self) -> Result<zenoh::Session, String> {
-        use zenoh::Wait as _;
+    pub fn open(&self) -> Result<zenoh::Session, SessionOpenError> {
         let config = self.config()?;
-        zenoh::open(config)
-            .wait()
-            .map_err(|e| format!("cannot open the zenoh session: {e}"))
+        zenoh::open(config).wait().map_err(SessionOpenError::Open)
     }
 }
+
+/// Closes a Zenoh session (peers see its liveliness tokens go at once).
+///
+/// # Errors
+/// [`SessionCloseError`] with Zenoh's reason.
+pub fn close(session: &zenoh::Session) -> Result<(), SessionCloseError> {
+    session.close().wait().map_err(SessionCloseError)
+}
+
+/// The network options do not make a Zenoh configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum NetworkConfigError {
+    /// Neither `--connect` nor `--listen` was given.
+    #[error("give at least one --connect or --listen endpoint (e.g. --listen tcp/10.0.0.1:7447)")]
+    NoEndpoint,
+    /// The `--zenoh-config` file could not be read or parsed.
+    #[error("--zenoh-config {}: {source}", path.display())]
+    ConfigFile {
+        /// The file.
+        path: PathBuf,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// Zenoh refused the setting an option makes.
+    #[error("{option}: zenoh refused {key} = {value}: {source}")]
+    OptionRefused {
+        /// The option (or `scouting`).
+        option: &'static str,
+        /// The configuration key.
+        key: &'static str,
+        /// The value given.
+        value: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// Zenoh refused one of the relay's reconnection settings.
+    #[error("zenoh refused {key} = {value}: {source}")]
+    TuningRefused {
+        /// The configuration key.
+        key: &'static str,
+        /// The value.
+        value: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+}
+
+/// The Zenoh session could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionOpenError {
+    /// The options do not make a configuration.
+    #[error(transparent)]
+    Config(#[from] NetworkConfigError),
+    /// Zenoh could not start with it.
+    #[error("cannot open the zenoh session: {0}")]
+    Open(#[source] zenoh::Error),
+}
+
+/// The Zenoh session did not close cleanly.
+#[derive(Debug, thiserror::Error)]
+#[error("closing the zenoh session: {0}")]
+pub struct SessionCloseError(#[source] zenoh::Error);
 
 #[cfg(test)]
 mod tests {
@@ -138,8 +208,9 @@ mod tests {
 
     #[test]
     fn endpoints_are_required_and_checked() {
-        assert!(args(&[], &[]).config().unwrap_err().contains("--connect"));
-        let err = args(&["nonsense"], &[]).config().unwrap_err();
+        let err = args(&[], &[]).config().unwrap_err().to_string();
+        assert!(err.contains("--connect"), "{err}");
+        let err = args(&["nonsense"], &[]).config().unwrap_err().to_string();
         assert!(err.contains("--connect"), "{err}");
         let config = args(&["tcp/10.0.0.1:7447"], &["tcp/10.0.0.2:7447"])
             .config()

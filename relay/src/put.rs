@@ -8,7 +8,34 @@ use std::time::Duration;
 use clap::Args;
 use zenoh::Wait as _;
 
-use crate::network::NetworkArgs;
+use crate::network::{NetworkArgs, SessionCloseError, SessionOpenError, close};
+
+/// Why `put` failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PutError {
+    /// The payload could not be read.
+    #[error("{what}: {source}")]
+    Read {
+        /// The file, or `<stdin>`.
+        what: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The Zenoh session could not be opened.
+    #[error(transparent)]
+    Session(#[from] SessionOpenError),
+    /// Zenoh refused the put.
+    #[error("--key {key:?}: {source}")]
+    Put {
+        /// The key.
+        key: String,
+        /// Zenoh's reason.
+        source: zenoh::Error,
+    },
+    /// The session did not close cleanly.
+    #[error(transparent)]
+    Close(#[from] SessionCloseError),
+}
 
 /// Arguments of `ygg-relay put`.
 #[derive(Args, Debug)]
@@ -31,16 +58,22 @@ pub struct PutArgs {
 ///
 /// # Errors
 /// An unreadable file, an invalid key, or a Zenoh session that cannot open.
-pub fn run(args: &PutArgs) -> Result<(), String> {
+pub fn run(args: &PutArgs) -> Result<(), PutError> {
     let mut payload = Vec::new();
     match &args.file {
         Some(path) if path.as_os_str() != "-" => {
-            payload = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            payload = std::fs::read(path).map_err(|source| PutError::Read {
+                what: path.display().to_string(),
+                source,
+            })?;
         }
         _ => {
             std::io::stdin()
                 .read_to_end(&mut payload)
-                .map_err(|e| format!("<stdin>: {e}"))?;
+                .map_err(|source| PutError::Read {
+                    what: "<stdin>".to_owned(),
+                    source,
+                })?;
         }
     }
     let session = args.network.open()?;
@@ -48,10 +81,10 @@ pub fn run(args: &PutArgs) -> Result<(), String> {
     session
         .put(&args.key, payload.clone())
         .wait()
-        .map_err(|e| format!("--key {:?}: {e}", args.key))?;
+        .map_err(|source| PutError::Put {
+            key: args.key.clone(),
+            source,
+        })?;
     println!("put key={} bytes={}", args.key, payload.len());
-    session
-        .close()
-        .wait()
-        .map_err(|e| format!("closing the zenoh session: {e}"))
+    Ok(close(&session)?)
 }

@@ -72,7 +72,10 @@ pub mod protocol;
 mod publisher;
 pub use publisher::shm;
 pub mod service;
-pub use service::{SetupError, init_iceoryx_logging};
+pub use service::{
+    ENV_YGG_LOG, SetupError, UnknownLogLevelError, init_binding_logging, init_iceoryx_logging,
+    set_iceoryx_log_level,
+};
 mod subscriber;
 #[cfg(test)]
 mod test_prefix;

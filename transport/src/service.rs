@@ -278,6 +278,46 @@ pub fn init_iceoryx_logging() {
     iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
 }
 
+/// The environment variable the bindings (C, Python) read for iceoryx2's log level when
+/// they load: `YGG_LOG=warn` shows the warnings they hide by default.
+pub const ENV_YGG_LOG: &str = "YGG_LOG";
+
+/// A log level name that is none of `trace`, `debug`, `info`, `warn`, `error`, `fatal`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown log level {0:?} (expected trace, debug, info, warn, error or fatal)")]
+pub struct UnknownLogLevelError(pub String);
+
+/// Sets iceoryx2's log level by name (`trace`, `debug`, `info`, `warn`, `error`, `fatal`;
+/// any case), process-wide. For bindings, whose users name levels as strings.
+///
+/// # Errors
+/// [`UnknownLogLevelError`] for any other name; the level is then left as it was.
+pub fn set_iceoryx_log_level(name: &str) -> Result<(), UnknownLogLevelError> {
+    use iceoryx2::prelude::LogLevel;
+    let level = match name.trim().to_ascii_lowercase().as_str() {
+        "trace" => LogLevel::Trace,
+        "debug" => LogLevel::Debug,
+        "info" => LogLevel::Info,
+        "warn" | "warning" => LogLevel::Warn,
+        "error" => LogLevel::Error,
+        "fatal" => LogLevel::Fatal,
+        _ => return Err(UnknownLogLevelError(name.to_owned())),
+    };
+    iceoryx2::prelude::set_log_level(level);
+    Ok(())
+}
+
+/// For bindings, when they load: iceoryx2's log level from [`ENV_YGG_LOG`] if it names a
+/// level, else as [`init_iceoryx_logging`] (`IOX2_LOG_LEVEL`, else errors only), so the
+/// routine warnings of a reader's or writer's start stay off a binding user's console
+/// unless asked for.
+pub fn init_binding_logging() {
+    let from_env = std::env::var(ENV_YGG_LOG).ok();
+    if from_env.is_none_or(|name| set_iceoryx_log_level(&name).is_err()) {
+        init_iceoryx_logging();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -261,10 +261,10 @@ void snapshot_accessors_and_queries(const ygg_snapshot* s) {
   EXPECT(same(list, {111}) && list.distances[0] == 9.0f);
   ygg_node_list_free(&list);
   const float dir[3] = {1.0f, 0.0f, 0.0f};
-  EXPECT_OK(ygg_snapshot_visible(s, 1, origin, dir, 0.3f, 2.0f, &list));
+  EXPECT_OK(ygg_snapshot_visible(s, 1, origin, dir, 17.0f, 2.0f, &list));  // degrees, as everywhere
   EXPECT(same(list, {110}));
   ygg_node_list_free(&list);
-  EXPECT_STATUS(ygg_snapshot_visible(s, 1, origin, dir, 5.0f, 2.0f, &list), YGG_STATUS_INVALID_ARGUMENT);
+  EXPECT_STATUS(ygg_snapshot_visible(s, 1, origin, dir, 200.0f, 2.0f, &list), YGG_STATUS_INVALID_ARGUMENT);
   EXPECT_OK(ygg_snapshot_nodes_with_label(s, YGG_ALL_LAYERS, "chair", &list));
   EXPECT(same(list, {10, 20}));
   ygg_node_list_free(&list);
@@ -554,6 +554,77 @@ void cpp_wrapper(const std::string& scene) {
     EXPECT(e.status() == YGG_STATUS_READER_OPEN);
   }
 }
+
+// Where the agent is (ygg_dsg::layout through the C API and the C++ wrapper), and the
+// transport's log level.
+void whereabouts_and_log_level(const std::string& fixtures) {
+  ygg::SceneGraph g;
+  const auto rooms_l = g.add_layer("ROOMS");
+  const auto objects_l = g.add_layer("OBJECTS");
+  const auto mesh_l = g.add_layer("MESH");
+  const auto agents_l = g.add_layer("AGENTS");
+  g.add_layer_edge(rooms_l, objects_l);
+  g.add_layer_edge(objects_l, mesh_l);
+  for (ygg::NodeId room : {1, 2}) {
+    const float x0 = room == 1 ? 0.0f : 10.0f;
+    g.add_node(room, rooms_l);
+    g.set_geometry(room, std::vector<ygg::Point>{{x0, 0.0f, 0.0f}, {x0 + 5.0f, 4.0f, 3.0f}});
+    g.enable_bounding_box(room);
+  }
+  g.add_node(20, objects_l);
+  g.nest(2, 20);
+  g.add_node(30, mesh_l);
+  g.set_geometry(30, std::vector<ygg::Point>{{12.0f, 2.0f, 0.5f}});
+  g.nest(20, 30);
+  const float xs[] = {1.0f, 9.0f, 12.0f};
+  for (ygg::NodeId pose = 100; pose < 103; ++pose) {
+    g.add_node(pose, agents_l);
+    g.set_geometry(pose, std::vector<ygg::Point>{{xs[pose - 100], 2.0f, 1.0f}});
+  }
+  const ygg::Snapshot s = g.snapshot();
+  const auto pose = s.newest_pose();
+  EXPECT(pose.has_value() && pose->node == 102 && pose->position[0] == 12.0f && pose->previous[0] == 9.0f);
+  EXPECT(pose.has_value() && pose->heading[0] == 1.0f && pose->heading[1] == 0.0f);
+  EXPECT(s.room_of({12.0f, 2.0f, 1.0f}) == std::optional<ygg::NodeId>(2));
+  EXPECT(s.room_of({1.0f, 1.0f, 9.0f}) == std::optional<ygg::NodeId>(1));  // x and y only
+  EXPECT(!s.room_of({7.0f, 1.0f, 0.0f}));
+  EXPECT(!s.room_scope(2));  // not a per-room layout
+  EXPECT((s.owners({30, 30, 20, 999}) == std::vector<ygg::NodeId>{2, 20}));
+  EXPECT(!ygg::SceneGraph().snapshot().newest_pose());
+  // The C calls' argument checks.
+  bool found = true;
+  ygg_agent_pose raw{};
+  std::uint64_t room = 0;
+  const float at[3] = {12.0f, 2.0f, 1.0f};
+  EXPECT_STATUS(ygg_snapshot_newest_pose(s.handle(), nullptr, &raw), YGG_STATUS_NULL_ARGUMENT);
+  EXPECT_STATUS(ygg_snapshot_room_of(s.handle(), nullptr, &found, &room), YGG_STATUS_NULL_ARGUMENT);
+  EXPECT_OK(ygg_snapshot_room_of(s.handle(), at, &found, &room));
+  EXPECT(found && room == 2);
+  ygg_node_list list{nullptr, nullptr, 0};
+  EXPECT_STATUS(ygg_snapshot_owners(s.handle(), nullptr, 2, &list), YGG_STATUS_NULL_ARGUMENT);
+  EXPECT(list.len == 0);
+  EXPECT_OK(ygg_snapshot_owners(s.handle(), nullptr, 0, &list));
+  EXPECT(list.len == 0);
+  // A per-room layout: a room's scope names a layer and a node of the snapshot.
+  const ygg::Snapshot office = ygg::SceneGraph::import_dsg(fixtures + "/office_tiny.json", "mint").snapshot();
+  const auto rooms_of_office = office.layer_nodes(*office.layer_by_name("ROOMS"));
+  std::size_t scoped = 0;
+  for (ygg::NodeId r : rooms_of_office) {
+    const auto scope = office.room_scope(r);
+    if (!scope) continue;
+    ++scoped;
+    ygg_node_list mesh_nodes{nullptr, nullptr, 0};
+    EXPECT_OK(ygg_snapshot_layer_nodes(office.handle(), scope->mesh_layer, &mesh_nodes));  // a layer
+    ygg_node_list_free(&mesh_nodes);
+    EXPECT(!office.subtree(scope->claimed).empty());  // a node (an unknown root's sub-tree is empty)
+  }
+  EXPECT(scoped > 0);
+  // The log level: names, and the error for another.
+  ygg::set_log_level("error");
+  EXPECT_STATUS(ygg_set_log_level("loud"), YGG_STATUS_INVALID_ARGUMENT);
+  EXPECT(error_has("loud"));
+  EXPECT_STATUS(ygg_set_log_level(nullptr), YGG_STATUS_NULL_ARGUMENT);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -581,6 +652,7 @@ int main(int argc, char** argv) {
   EXPECT_OK(ygg_graph_destroy(g));
   writer_and_reader(scene);
   cpp_wrapper(scene);
+  whereabouts_and_log_level(fixtures);
   const std::string cleanup = std::string(dir) + "/scene.ygg";
   std::remove(cleanup.c_str());
   std::remove((std::string(dir) + "/garbage.ygg").c_str());

@@ -5,36 +5,46 @@ use ygg_store::{NodeId, Point, SceneView};
 
 /// One query of the contract, as `ygg query` reads it from a JSON line
 /// (`{"op":"nearest_object","point":[x,y,z]}`, ...): see [`ObjectQuery::from_json`].
-/// Serializes to that same form.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-#[serde(tag = "op", rename_all = "snake_case")]
+/// Serializes to that same form; deserializes from it with serde (any self-describing
+/// format; [`ObjectQuery::from_value`] adds the checks that word the errors for a JSON
+/// user).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ObjectQuery {
     /// [`Objects::nearest_object`].
     NearestObject {
         /// The query point.
+        #[serde(deserialize_with = "field::point")]
         point: Point,
     },
     /// [`Objects::objects_within`].
     ObjectsWithin {
         /// The centre.
+        #[serde(deserialize_with = "field::point")]
         point: Point,
         /// The radius, metres (inclusive).
+        #[serde(deserialize_with = "field::radius")]
         radius: f32,
     },
     /// [`Objects::visible_objects`].
     VisibleObjects {
         /// The apex of the view.
+        #[serde(deserialize_with = "field::eye")]
         eye: Point,
         /// The viewing direction (any finite non-zero vector).
+        #[serde(deserialize_with = "field::dir")]
         dir: Point,
         /// Half of the opening angle, degrees, in `[0, 180]`.
+        #[serde(deserialize_with = "field::half_angle_deg")]
         half_angle_deg: f32,
         /// How far the view reaches, metres.
+        #[serde(deserialize_with = "field::range")]
         range: f32,
     },
     /// [`Objects::objects_with_label`].
     ObjectsWithLabel {
         /// The label.
+        #[serde(deserialize_with = "field::label")]
         label: String,
     },
 }
@@ -76,99 +86,100 @@ impl ObjectQuery {
     /// # Errors
     /// As [`ObjectQuery::from_json`].
     pub fn from_value(v: &serde_json::Value) -> Result<Self, String> {
-        use serde_json::Value;
-        let ops = || Self::OPS.join(", ");
+        use serde::Deserialize as _;
+        // Serde's internally tagged form also takes `[op, fields...]` arrays and words a
+        // missing or mistyped tag for Rust readers; these two checks word them for JSON.
         let Some(obj) = v.as_object() else {
             return Err(format!(
                 "expected a JSON object with an \"op\" ({}), got {}",
-                ops(),
+                Self::OPS.join(", "),
                 brief(v)
             ));
         };
-        let op = match obj.get("op") {
-            Some(Value::String(op)) => op.as_str(),
+        match obj.get("op") {
+            Some(serde_json::Value::String(_)) => {}
             Some(other) => return Err(format!("\"op\" must be a string, got {}", brief(other))),
-            None => return Err(format!("missing field \"op\" (one of {})", ops())),
-        };
-        let fields: &[&str] = match op {
-            "nearest_object" => &["point"],
-            "objects_within" => &["point", "radius"],
-            "visible_objects" => &["eye", "dir", "half_angle_deg", "range"],
-            "objects_with_label" => &["label"],
-            _ => return Err(format!("unknown op {op:?} (expected one of {})", ops())),
-        };
-        if let Some(k) = obj
-            .keys()
-            .find(|k| *k != "op" && !fields.contains(&k.as_str()))
-        {
-            return Err(format!(
-                "unknown field {k:?} for op {op} (it takes {})",
-                fields.join(", ")
-            ));
+            None => {
+                return Err(format!(
+                    "missing field \"op\" (one of {})",
+                    Self::OPS.join(", ")
+                ));
+            }
         }
-        let get = |name: &str| {
-            obj.get(name)
-                .ok_or_else(|| format!("missing field {name:?} for op {op}"))
-        };
-        let to_f32 = |name: &str, x: f64| -> Result<f32, String> {
-            let y = x as f32;
-            if y.is_finite() {
-                Ok(y)
-            } else {
-                Err(format!("field {name:?}: {x:?} is not a finite f32"))
-            }
-        };
-        let number = |name: &str| -> Result<f32, String> {
-            let v = get(name)?;
-            let x = v
-                .as_f64()
-                .ok_or_else(|| format!("field {name:?}: expected a number, got {}", brief(v)))?;
-            to_f32(name, x)
-        };
-        let point = |name: &str| -> Result<Point, String> {
-            let v = get(name)?;
-            let xyz: Option<Vec<f64>> = v
-                .as_array()
-                .filter(|a| a.len() == 3)
-                .and_then(|a| a.iter().map(serde_json::Value::as_f64).collect());
-            let xyz = xyz.ok_or_else(|| {
-                format!(
-                    "field {name:?}: expected an array of 3 numbers, got {}",
-                    brief(v)
-                )
-            })?;
-            Ok([
-                to_f32(name, xyz[0])?,
-                to_f32(name, xyz[1])?,
-                to_f32(name, xyz[2])?,
-            ])
-        };
-        Ok(match op {
-            "nearest_object" => ObjectQuery::NearestObject {
-                point: point("point")?,
-            },
-            "objects_within" => ObjectQuery::ObjectsWithin {
-                point: point("point")?,
-                radius: number("radius")?,
-            },
-            "visible_objects" => ObjectQuery::VisibleObjects {
-                eye: point("eye")?,
-                dir: point("dir")?,
-                half_angle_deg: number("half_angle_deg")?,
-                range: number("range")?,
-            },
-            _ => {
-                let v = get("label")?;
-                ObjectQuery::ObjectsWithLabel {
-                    label: v
-                        .as_str()
-                        .ok_or_else(|| {
-                            format!("field \"label\": expected a string, got {}", brief(v))
-                        })?
-                        .to_owned(),
-                }
-            }
+        // Serde quotes names in backticks (`missing field `label``) and calls an op a
+        // variant; JSON users read double quotes and the field's name.
+        ObjectQuery::deserialize(v).map_err(|e| {
+            e.to_string()
+                .replace('`', "\"")
+                .replace("unknown variant", "unknown op")
         })
+    }
+}
+
+/// The field readers of [`ObjectQuery`]'s `#[serde(deserialize_with)]`: each reads its
+/// field as a JSON value and names the field in its message.
+mod field {
+    use serde::de::{Deserialize, Deserializer, Error};
+    use serde_json::Value;
+    use ygg_store::Point;
+
+    /// A reader `$field` of a `$ty` field, checked by `$read`.
+    macro_rules! reader {
+        ($($field:ident: $ty:ty = $read:ident;)*) => {$(
+            pub(super) fn $field<'de, D: Deserializer<'de>>(d: D) -> Result<$ty, D::Error> {
+                $read(stringify!($field), &Value::deserialize(d)?).map_err(D::Error::custom)
+            }
+        )*};
+    }
+
+    reader! {
+        point: Point = point_in;
+        eye: Point = point_in;
+        dir: Point = point_in;
+        radius: f32 = number_in;
+        half_angle_deg: f32 = number_in;
+        range: f32 = number_in;
+        label: String = string_in;
+    }
+
+    fn to_f32(name: &str, x: f64) -> Result<f32, String> {
+        let y = x as f32;
+        if y.is_finite() {
+            Ok(y)
+        } else {
+            Err(format!("field {name:?}: {x:?} is not a finite f32"))
+        }
+    }
+
+    fn number_in(name: &str, v: &Value) -> Result<f32, String> {
+        let x = v
+            .as_f64()
+            .ok_or_else(|| format!("field {name:?}: expected a number, got {}", super::brief(v)))?;
+        to_f32(name, x)
+    }
+
+    fn point_in(name: &str, v: &Value) -> Result<Point, String> {
+        let xyz: Option<Vec<f64>> = v
+            .as_array()
+            .filter(|a| a.len() == 3)
+            .and_then(|a| a.iter().map(Value::as_f64).collect());
+        let xyz = xyz.ok_or_else(|| {
+            format!(
+                "field {name:?}: expected an array of 3 numbers, got {}",
+                super::brief(v)
+            )
+        })?;
+        Ok([
+            to_f32(name, xyz[0])?,
+            to_f32(name, xyz[1])?,
+            to_f32(name, xyz[2])?,
+        ])
+    }
+
+    fn string_in(name: &str, v: &Value) -> Result<String, String> {
+        v.as_str()
+            .map(str::to_owned)
+            .ok_or_else(|| format!("field {name:?}: expected a string, got {}", super::brief(v)))
     }
 }
 
