@@ -525,8 +525,13 @@ mod tests {
         shell.expect_line(Duration::from_secs(30), |l| l == "ready");
         assert!(shell.catches(Signal::TERM));
         assert!(!shell.catches(Signal::USR2));
+        // Between fork and exec the child is still a copy of sh, trap included: wait for
+        // the exec (its command name becomes `sleep`), which resets the caught signals.
+        let is_sleep = |pid: u32| {
+            std::fs::read_to_string(format!("/proc/{pid}/comm")).is_ok_and(|c| c.trim() == "sleep")
+        };
         crate::wait_until(Duration::from_secs(30), "sh started sleep", || {
-            !shell.children().is_empty()
+            shell.children().first().is_some_and(|&pid| is_sleep(pid))
         });
         let sleep = shell.children();
         assert_eq!(sleep.len(), 1, "{sleep:?}");
