@@ -8,15 +8,19 @@ use std::process::Command;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
+use ygg_transport::run_files::{
+    files_below, is_dead_run_file, prefix_files, prefix_leftovers, remove_files, run_prefix,
+    stale_run_files,
+};
 use ygg_transport::service::{ENV_IOX2_PREFIX, ICEORYX2_ROOT};
 
 use crate::{Proc, Watchdog, binary, poll_until};
 
 /// The POSIX shared-memory directory.
-pub const SHM_DIR: &str = "/dev/shm";
+pub use ygg_transport::service::DEFAULT_SHM_DIR as SHM_DIR;
 
 /// Start of every prefix [`TestScene::new`] makes: `ygt<pid>x<n>_`.
-pub const PREFIX_TAG: &str = "ygt";
+pub use ygg_transport::run_files::RUN_PREFIX_TAG as PREFIX_TAG;
 
 /// A unique scene name and iceoryx2 prefix for one test (or one case of a bench).
 #[derive(Debug)]
@@ -35,7 +39,7 @@ impl TestScene {
         let pid = std::process::id();
         Self {
             name: format!("{tag}-{pid}-{n}"),
-            prefix: format!("{PREFIX_TAG}{pid}x{n}_"),
+            prefix: run_prefix(pid, n),
         }
     }
 
@@ -91,21 +95,13 @@ impl TestScene {
     /// Every file of this scene's prefix below `/dev/shm` (iceoryx2's node and service
     /// files included: [`ygg_transport::service::ICEORYX2_ROOT`]).
     pub fn files(&self) -> Vec<PathBuf> {
-        let mut found = Vec::new();
-        collect(
-            Path::new(SHM_DIR),
-            &|n| n.starts_with(&self.prefix),
-            &mut found,
-        );
-        found
+        prefix_files(&self.prefix)
     }
 
     /// [`TestScene::files`] except iceoryx2's persistent per-prefix `*.global_mgmt`
     /// counter (16 bytes, kept by design).
     pub fn leftovers(&self) -> Vec<PathBuf> {
-        let mut found = self.files();
-        found.retain(|p| !p.to_string_lossy().ends_with(".global_mgmt"));
-        found
+        prefix_leftovers(&self.prefix)
     }
 
     /// Asserts that the scene left nothing behind, waiting up to `grace` for processes that are
@@ -136,11 +132,7 @@ impl TestScene {
         };
         entries
             .flatten()
-            .filter(|node| {
-                let mut found = Vec::new();
-                collect(&node.path(), &|n| n.starts_with(&self.prefix), &mut found);
-                !found.is_empty()
-            })
+            .filter(|node| !files_below(&node.path(), &|n| n.starts_with(&self.prefix)).is_empty())
             .count()
     }
 
@@ -175,46 +167,19 @@ impl Drop for TestScene {
     }
 }
 
-/// Adds the files below `dir` (recursively) whose name `keep` accepts to `found`.
-fn collect(dir: &Path, keep: &dyn Fn(&str) -> bool, found: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let path = entry.path();
-        if entry.file_type().is_ok_and(|t| t.is_dir()) {
-            collect(&path, keep, found);
-        } else if keep(&entry.file_name().to_string_lossy()) {
-            found.push(path);
-        }
-    }
-}
-
 /// Removes the files of [`TestScene`] prefixes (below `/dev/shm`, iceoryx2's node files
 /// included, and directly in the temp dir: sockets named after a prefix) whose process no longer
 /// exists: what runs killed with SIGKILL could not clean up. Returns how many files were
 /// removed.
 pub fn remove_stale() -> usize {
-    let dead_run = |name: &str| -> bool {
-        let pid = name
-            .strip_prefix(PREFIX_TAG)
-            .and_then(|rest| rest.split(|c: char| !c.is_ascii_digit()).next())
-            .and_then(|d| d.parse::<u32>().ok());
-        pid.is_some_and(|pid| {
-            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
-        })
-    };
-    let mut found = Vec::new();
-    collect(Path::new(SHM_DIR), &dead_run, &mut found);
+    let mut found = stale_run_files();
     if let Ok(entries) = std::fs::read_dir(std::env::temp_dir()) {
-        for e in entries.flatten() {
-            if dead_run(&e.file_name().to_string_lossy()) {
-                found.push(e.path());
-            }
-        }
+        found.extend(
+            entries
+                .flatten()
+                .filter(|e| is_dead_run_file(&e.file_name().to_string_lossy()))
+                .map(|e| e.path()),
+        );
     }
-    found
-        .into_iter()
-        .filter(|p| std::fs::remove_file(p).is_ok())
-        .count()
+    remove_files(found)
 }

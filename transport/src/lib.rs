@@ -9,7 +9,8 @@
 //!   zero-copy.
 //! * [`protocol`] is the wire format both sides share: the segment header, payload blocks,
 //!   the manifest prefix and event ids. [`service`] names a scene's services and holds
-//!   their iceoryx2 configuration and quality of service.
+//!   their iceoryx2 configuration and quality of service. [`run_files`] finds and removes
+//!   the `/dev/shm` files of a run's iceoryx2 prefix (the demo's and the tests' clean-up).
 //!
 //! The transport knows bytes, not graphs: segment payloads are opaque here (a segment id is a
 //! layer or a chunk of one, the transport does not care), and validating the archives inside
@@ -70,6 +71,7 @@ pub mod limits;
 mod process_watch;
 pub mod protocol;
 mod publisher;
+pub mod run_files;
 pub use publisher::shm;
 pub mod service;
 pub use service::{
