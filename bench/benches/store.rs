@@ -222,6 +222,8 @@ fn mesh_append(c: &mut Criterion) {
                 }
                 live.set_geometry(node, points).unwrap();
                 let published = cache.published_layer(&mut live, layer);
+                // One part: the cache keeps the layer in one piece.
+                let published = &published.parts()[0];
                 let mut bytes = published.segment.archived_len();
                 buf.resize(bytes, 0);
                 published.segment.archive_into(&mut buf).unwrap();

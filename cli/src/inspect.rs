@@ -18,6 +18,7 @@ use ygg_dsg::NodeSymbol;
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::objects::Objects;
 use ygg_store::index::SpatialIndex;
+use ygg_store::snapshot::segment_layer_part;
 use ygg_store::{LayerId, NodeId, SceneView, SnapshotFile};
 
 use crate::query::{live_snapshot, seconds};
@@ -83,10 +84,13 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
             let raw = snapshot.raw();
             let memory = Memory {
                 manifest: raw.manifest_bytes().len(),
-                layers: raw
-                    .layers()
-                    .map(|(e, b)| (LayerId(e.layer_id), b.len()))
-                    .collect(),
+                layers: raw.layers().fold(BTreeMap::new(), |mut bytes, (e, b)| {
+                    // A layer's bytes: its parts and their chunks.
+                    if let Some((layer, _)) = segment_layer_part(e.layer_id) {
+                        *bytes.entry(layer).or_default() += b.len();
+                    }
+                    bytes
+                }),
                 total: None,
             };
             let view = snapshot.view();

@@ -24,21 +24,17 @@ impl JoinMemo {
     }
 
     /// Whether a join may take the layer of manifest entry `entry`, at position `at` of a
-    /// manifest with the structure of the last accepted one, as checked: its segment (id
-    /// `segment_id`, bytes the caller found to be the same as in the last accepted cut)
-    /// had this id, generation and node count there and named no chunk.
-    pub(crate) fn knows_layer(
-        &self,
-        at: usize,
-        entry: &ArchivedManifestLayer,
-        segment_id: u32,
-    ) -> bool {
+    /// manifest with the structure of the last accepted one (so the same parts), as
+    /// checked, given that the caller found every part's bytes to be the same as in the
+    /// last accepted cut: the layer had this id, generation and node count there and
+    /// named no chunk.
+    pub(crate) fn knows_layer(&self, at: usize, entry: &ArchivedManifestLayer) -> bool {
         let now = (
             entry.id.to_native(),
             entry.generation.to_native(),
             entry.node_count.to_native(),
         );
-        now.0 == segment_id && self.plain_layers.get(at) == Some(&Some(now))
+        self.plain_layers.get(at) == Some(&Some(now))
     }
 
     /// Remembers an accepted cut: its manifest (read from `bytes`; copied unless its
@@ -48,7 +44,7 @@ impl JoinMemo {
         bytes: &[u8],
         manifest: &ArchivedManifest,
         same_structure: bool,
-        segment_ids: impl Iterator<Item = u32>,
+        segment_ids: impl Iterator<Item = u64>,
     ) {
         if !same_structure {
             self.manifest = Some(CheckedManifest::new(bytes, manifest));

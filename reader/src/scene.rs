@@ -29,8 +29,8 @@ use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
     ArchivedScene, KnownParts, SegmentBytes, chunk_unchecked, is_chunk_segment_id,
-    is_tree_chunk_segment_id, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
-    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
+    is_tree_chunk_segment_id, layer_unchecked, manifest_unchecked, segment_layer_part,
+    tree_chunk_unchecked, validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -160,9 +160,9 @@ pub struct SceneReader {
     subscriber: SegmentSubscriber,
     /// The identity of each segment of the current snapshot, ascending by segment id (as a
     /// cut lists them): what a newer cut need not validate again.
-    validated: Vec<(u32, SegmentIdentity)>,
+    validated: Vec<(u64, SegmentIdentity)>,
     /// In copy mode: each layer's private copy.
-    copies: Option<HashMap<u32, LayerCopy>>,
+    copies: Option<HashMap<u64, LayerCopy>>,
     current: Option<SceneSnapshot>,
     /// What the current snapshot's join lets the next one skip.
     memo: JoinMemo,
@@ -343,7 +343,8 @@ impl SceneReader {
             ),
         };
         let mut layers = Vec::with_capacity(snap.layer_count());
-        let mut known_layers = Vec::with_capacity(snap.layer_count());
+        let mut known_layers = Vec::with_capacity(manifest.layers.len());
+        let mut part_known = Vec::with_capacity(snap.layer_count());
         let mut chunks = Vec::new();
         let mut trees = Vec::new();
         let mut identities = Vec::with_capacity(snap.layer_count());
@@ -398,15 +399,9 @@ impl SceneReader {
                     reason: "a layer segment listed after point chunks".into(),
                 }));
             } else {
-                let at = layers.len();
-                known_layers.push(
-                    known
-                        && same_structure
-                        && manifest
-                            .layers
-                            .get(at)
-                            .is_some_and(|m| self.memo.knows_layer(at, m, entry.layer_id)),
-                );
+                if let Some((layer, _)) = segment_layer_part(entry.layer_id) {
+                    part_known.push((layer.0, known));
+                }
                 layers.push(if known {
                     // SAFETY: these exact bytes (same address, length and identity) passed
                     // `validate_layer` earlier, and the transport never changes a
@@ -418,6 +413,21 @@ impl SceneReader {
             }
             newly += usize::from(!known);
             identities.push((entry.layer_id, identity));
+        }
+        // A layer is known when its entry and every one of its parts are as in the last
+        // accepted cut (parts and manifest entries both ascend by layer id).
+        let mut parts = part_known.iter().peekable();
+        for (at, m) in manifest.layers.iter().enumerate() {
+            let id = m.id.to_native();
+            let mut all_known = true;
+            while let Some(&&(layer, known)) = parts.peek() {
+                if layer > id {
+                    break;
+                }
+                all_known &= layer == id && known;
+                parts.next();
+            }
+            known_layers.push(all_known && same_structure && self.memo.knows_layer(at, m));
         }
         let known = KnownParts {
             structure: same_structure,

@@ -65,7 +65,7 @@ pub struct Cut {
 #[derive(Debug, Default)]
 pub struct Assembler {
     /// Validated segments by (session, segment id, generation).
-    segments: BTreeMap<(u64, u32, u64), Arc<SegmentBytes>>,
+    segments: BTreeMap<(u64, u64, u64), Arc<SegmentBytes>>,
     /// The newest validated manifest not handed out yet.
     pending: Option<ManifestPayload>,
     /// (session, generation) of the last cut handed out.
@@ -87,7 +87,7 @@ impl Assembler {
     pub fn add_segment(
         &mut self,
         session: u64,
-        id: u32,
+        id: u64,
         generation: u64,
         bytes: SegmentBytes,
     ) -> Result<(), AssembleError> {
@@ -181,7 +181,7 @@ impl Assembler {
             .iter()
             .map(|e| Arc::clone(&self.segments[&(manifest.session, e.layer_id, e.generation)]))
             .collect();
-        let named: BTreeMap<u32, u64> = manifest
+        let named: BTreeMap<u64, u64> = manifest
             .entries
             .iter()
             .map(|e| (e.layer_id, e.generation))
@@ -227,7 +227,7 @@ mod tests {
             let entries: Vec<ManifestEntry> = g
                 .layers()
                 .map(|l| ManifestEntry {
-                    layer_id: l.0,
+                    layer_id: ygg_store::snapshot::part_segment_id(l, 0).expect("fits"),
                     generation: g.layer_generation(l).expect("layer"),
                 })
                 .collect();

@@ -141,7 +141,7 @@ struct Exporter<'a> {
     /// Declared while a live writer is exported.
     token: Option<LivelinessToken>,
     /// Per segment id, the (session, generation) last put.
-    sent: BTreeMap<u32, (u64, u64)>,
+    sent: BTreeMap<u64, (u64, u64)>,
 }
 
 impl Exporter<'_> {
@@ -167,7 +167,7 @@ impl Exporter<'_> {
             segments += 1;
             bytes += payload.len();
         }
-        let live: Vec<u32> = snapshot.entries().map(|e| e.layer_id).collect();
+        let live: Vec<u64> = snapshot.entries().map(|e| e.layer_id).collect();
         self.sent.retain(|id, _| live.contains(id));
         let manifest = manifest_payload(snapshot);
         bytes += manifest.len();

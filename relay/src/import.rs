@@ -60,7 +60,7 @@ pub enum ImportError {
     #[error("publishing segment {id}: {source}")]
     Segment {
         /// Its id.
-        id: u32,
+        id: u64,
         /// The transport's reason.
         source: PublishError,
     },
@@ -193,7 +193,7 @@ struct Local {
     /// The remote writer session whose cuts it carries.
     remote_session: u64,
     /// Segment ids it publishes.
-    ids: BTreeSet<u32>,
+    ids: BTreeSet<u64>,
     /// The last snapshot generation published.
     generation: u64,
 }
@@ -358,7 +358,7 @@ impl Importer<'_> {
                 generation: manifest.generation,
                 source,
             })?;
-        let named: BTreeSet<u32> = manifest.entries.iter().map(|e| e.layer_id).collect();
+        let named: BTreeSet<u64> = manifest.entries.iter().map(|e| e.layer_id).collect();
         for gone in local.ids.difference(&named) {
             local.publisher.retire_layer(*gone);
         }

@@ -16,7 +16,7 @@ pub enum Item {
     /// A segment (opaque id) of a generation.
     Segment {
         /// The segment id.
-        id: u32,
+        id: u64,
         /// Its generation.
         generation: u64,
     },
@@ -239,7 +239,7 @@ mod tests {
                 generation: 42,
             },
             Item::Segment {
-                id: u32::MAX - 1,
+                id: u64::MAX - 1,
                 generation: u64::MAX,
             },
             Item::Manifest { generation: 3 },

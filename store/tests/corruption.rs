@@ -236,7 +236,7 @@ fn chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<PointChunk>)
                     generation: s.generation,
                     len: c.len() as u32,
                 });
-                chunks.push(PointChunk::new(l, i, s.generation, c));
+                chunks.push(PointChunk::new(l, 0, i, s.generation, c));
             }
             s.point_chunk_len = 4;
             s.points.clear();
@@ -297,23 +297,17 @@ fn inconsistent_point_chunks_are_refused_naming_what_is_wrong() {
     assert_eq!(points, 2 * 30, "every node's points and the layer index's");
 
     let e = check_chunked_cut(&m, &l, &c[..c.len() - 1]).unwrap_err();
-    assert!(e.contains("names point chunk 7, not given"), "{e}");
+    assert!(e.contains("names 8 point chunks, 7 given"), "{e}");
 
     let mut more = c.clone();
     more.push(c[0].clone());
     let e = check_chunked_cut(&m, &l, &more).unwrap_err();
-    assert!(
-        e.contains("1 point chunks given that no layer names"),
-        "{e}"
-    );
+    assert!(e.contains("point chunks given out of order"), "{e}");
 
     let mut swapped = c.clone();
     swapped.swap(0, 1);
     let e = check_chunked_cut(&m, &l, &swapped).unwrap_err();
-    assert!(
-        e.contains("chunk 1, generation") && e.contains("names chunk 0"),
-        "{e}"
-    );
+    assert!(e.contains("point chunks given out of order"), "{e}");
 
     // A chunk of another generation (held from an older cut).
     let mut older = chunked_cut(&g);
@@ -390,21 +384,24 @@ fn a_rejoin_reads_chunks_past_known_layers_and_refuses_one_given_for_a_known_lay
     // A chunk given for the rooms layer, which names none: refused whether it comes
     // before the objects layer's chunks or after them.
     let rooms = g.layer_by_name("rooms").unwrap();
-    let stray = archive(&PointChunk::new(rooms, 0, cut.1[1].generation, &[[0.0; 3]]));
+    let stray = archive(&PointChunk::new(
+        rooms,
+        0,
+        0,
+        cut.1[1].generation,
+        &[[0.0; 3]],
+    ));
     let mut before = vec![stray.clone()];
     before.extend(c.iter().cloned());
     let e = rejoin_chunked_cut(&m, &l, &before, &known).unwrap_err();
     assert!(
-        e.contains("where layer") && e.contains("names chunk 0"),
+        e.contains("1 point chunks given that no part names") && e.contains("chunk 0 of layer 1"),
         "{e}"
     );
     let mut after = c.clone();
     after.push(stray);
     let e = rejoin_chunked_cut(&m, &l, &after, &known).unwrap_err();
-    assert!(
-        e.contains("1 point chunks given that no layer names"),
-        "{e}"
-    );
+    assert!(e.contains("point chunks given out of order"), "{e}");
 }
 
 /// Damages `b` at a random place: one bit flipped, or a 4-byte word overwritten with
@@ -475,6 +472,7 @@ fn tree_chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<TreeChu
             trees.push(TreeChunk {
                 version: FORMAT_VERSION,
                 layer: l.0,
+                part: 0,
                 slot,
                 generation,
                 items,
@@ -552,10 +550,10 @@ fn inconsistent_tree_chunks_are_refused_naming_what_is_wrong() {
     let e = check_tree_chunked_cut(&cut, |t| t.clear()).unwrap_err();
     assert!(e.contains("names tree chunk 1, not given"), "{e}");
     let e = check_tree_chunked_cut(&cut, |t| t.push(t[0].clone())).unwrap_err();
-    assert!(e.contains("1 tree chunks given that no layer names"), "{e}");
-    // The two rooms' trees swapped: each is refused by the slot its index names.
+    assert!(e.contains("tree chunks given out of order"), "{e}");
+    // The two rooms' trees swapped: refused, as given out of order.
     let e = check_tree_chunked_cut(&cut, |t| t.swap(0, 1)).unwrap_err();
-    assert!(e.contains("slot 2") && e.contains("names tree 1"), "{e}");
+    assert!(e.contains("tree chunks given out of order"), "{e}");
 
     // A tree of another generation (held from an older cut), of another layer, or with
     // items past the index's base rows.
@@ -567,8 +565,10 @@ fn inconsistent_tree_chunks_are_refused_naming_what_is_wrong() {
     };
     let e = chunk(|t| t.generation -= 1);
     assert!(e.contains("names tree 0 at generation"), "{e}");
+    // Chunks are found by (layer, part, slot): one that names another layer is not the
+    // one its part names.
     let e = chunk(|t| t.layer += 1);
-    assert!(e.contains("tree chunk segment (layer"), "{e}");
+    assert!(e.contains("names tree chunk 0, not given"), "{e}");
     let e = chunk(|t| t.items += 1);
     assert!(e.contains("items below"), "{e}");
     let e = chunk(|t| t.items = 0);

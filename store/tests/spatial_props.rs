@@ -5,17 +5,17 @@
 //! since their base tree, and folded), and through indexes a reader builds itself; bad
 //! input is an error.
 
+#[path = "common/published.rs"]
+mod published;
+
 use proptest::prelude::*;
-use std::collections::BTreeMap;
+use published::{Publisher, TREE_CHUNK};
 use ygg_store::index::{IndexCache, SpatialIndex, build_layer_index, build_subtree_index};
 use ygg_store::query::{
     self, ConeView, SpatialQueryError, nearest_in_index, nearest_in_subtree, nearest_nodes,
     nodes_within_radius, visible, within_index,
 };
-use ygg_store::snapshot::{
-    ArchivedScene, SegmentBytes, SegmentCache, archive, is_tree_chunk_segment_id, validate_chunk,
-    validate_layer, validate_manifest, validate_tree_chunk,
-};
+use ygg_store::snapshot::{SegmentCache, archive, is_tree_chunk_segment_id};
 use ygg_store::{LayerId, NodeId, Point, SceneGraph, SceneView, Scope, distance_squared};
 
 #[derive(Clone, Debug)]
@@ -392,83 +392,12 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
     }
 }
 
-/// A publishing writer and a reader in one: the writer's cache patches the layer indexes
-/// it built before and chunks every layer of more than [`CHUNK`] points (small, so that
-/// chunk boundaries fall everywhere) and sends every tree (layer index base, node index)
-/// of [`TREE_CHUNK`] points or more as a tree chunk; like the transport, only chunks whose
-/// generation changed are sent, and the reader keeps the others as it got them. A chunk
-/// the cache failed to resend after its points changed, or a tree after a fold, would
-/// answer queries wrongly.
-struct Publisher {
-    segments: SegmentCache,
-    /// Chunks the reader holds: segment id -> (generation, bytes).
-    held: BTreeMap<u32, (u64, SegmentBytes)>,
-}
-
-/// Points per chunk in [`Publisher`].
-const CHUNK: usize = 4;
-
-/// Fewest points of a tree that [`Publisher`] sends as a tree chunk.
-const TREE_CHUNK: usize = 8;
-
-impl Publisher {
-    fn new() -> Self {
-        Publisher {
-            segments: SegmentCache::with_point_chunk_len(CHUNK)
-                .with_tree_chunk_min_points(TREE_CHUNK),
-            held: BTreeMap::new(),
-        }
-    }
-
-    /// Publishes `g` now: the archived manifest, each layer, and the ids of the chunks
-    /// of the cut (their bytes in `held`).
-    fn publish(&mut self, g: &mut SceneGraph) -> (SegmentBytes, Vec<SegmentBytes>, Vec<u32>) {
-        let layers: Vec<LayerId> = g.layers().collect();
-        let mut archived = Vec::new();
-        let (mut ids, mut tree_ids) = (Vec::new(), Vec::new());
-        for l in layers {
-            let p = self.segments.published_layer(g, l);
-            archived.push(archive(p.segment));
-            for (i, (id, generation)) in p.chunks().enumerate() {
-                if self.held.get(&id).map(|h| h.0) != Some(generation) {
-                    self.held.insert(id, (generation, archive(&p.chunk(i))));
-                }
-                ids.push(id);
-            }
-            for (id, generation, tree) in p.tree_chunks() {
-                if self.held.get(&id).map(|h| h.0) != Some(generation) {
-                    self.held.insert(id, (generation, archive(&tree)));
-                }
-                tree_ids.push(id);
-            }
-        }
-        ids.extend(tree_ids);
-        self.held.retain(|id, _| ids.contains(id));
-        (archive(self.segments.manifest(g, 1)), archived, ids)
-    }
-}
-
 /// Checks every query on the segments a publishing writer sends for `g` now, as a
-/// reader that kept the unchanged chunks sees them.
+/// reader that kept the unchanged parts and chunks sees them.
 fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Probe]) {
-    let (manifest, layers, chunk_ids) = publisher.publish(g);
-    let manifest = validate_manifest(&manifest, "manifest").unwrap();
-    let layers = layers
-        .iter()
-        .map(|l| validate_layer(l, "layer").unwrap())
-        .collect();
-    let (tree_ids, point_ids): (Vec<u32>, Vec<u32>) = chunk_ids
-        .iter()
-        .partition(|id| is_tree_chunk_segment_id(**id));
-    let chunks = point_ids
-        .iter()
-        .map(|id| validate_chunk(&publisher.held[id].1, "chunk").unwrap())
-        .collect();
-    let trees = tree_ids
-        .iter()
-        .map(|id| validate_tree_chunk(&publisher.held[id].1, "tree chunk").unwrap())
-        .collect();
-    let view = ArchivedScene::new(manifest, layers, chunks, trees).unwrap();
+    let (manifest, ids) = publisher.publish(g);
+    let segments = publisher.validated(&manifest, &ids);
+    let view = segments.join().unwrap();
     check_view(&view, probes);
     for l in g.layers() {
         assert_eq!(
@@ -937,7 +866,7 @@ fn a_fold_that_keeps_the_point_count_resends_the_tree_chunk() {
     }
     g.enable_layer_index(mesh).unwrap();
     let probes = six_probes(|i| [i - 3, 2 - i, i % 3], [1, 10, 60], 20);
-    let mut publisher = Publisher::new();
+    let mut publisher = Publisher::one_piece();
     let mut resent = 0;
     let mut last = None;
     for i in 0..40u64 {
@@ -994,10 +923,10 @@ fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_se
         (i, vec![(100 + i, cluster(&[2 * i as i8 - 6, 0, 0], k))])
     }));
     let probes = six_probes(|i| [2 * i - 6, 1, i % 2], [1, 3, 8], 30);
-    let mut publisher = Publisher::new();
+    let mut publisher = Publisher::one_piece();
     check_published(&mut g, &mut publisher, &probes);
     let big_tree = |publisher: &Publisher| {
-        let trees: Vec<(u32, u64)> = publisher
+        let trees: Vec<(u64, u64)> = publisher
             .held
             .iter()
             .filter(|(id, _)| is_tree_chunk_segment_id(**id))
@@ -1012,7 +941,7 @@ fn small_node_index_trees_are_withheld_from_a_publish_and_built_for_an_inline_se
         let p = [2 * step as i8 - 6, 3, 1];
         g.set_geometry(NodeId(100 + step), cluster(&p, 5)).unwrap();
         let published = publisher.segments.published_layer(&mut g, objects);
-        let published_len = archive(published.segment).len();
+        let published_len = archive(published.parts()[0].segment).len();
         assert!(
             published_len < inline_len,
             "the published objects layer ({published_len} bytes) carries no small tree (inline: {inline_len} bytes)"
@@ -1049,7 +978,7 @@ fn a_small_tree_over_many_nodes_is_not_withheld() {
     let mut cache = SegmentCache::new();
     let tree_sizes = |cache: &mut SegmentCache, g: &mut SceneGraph| -> Vec<(u64, usize)> {
         let published = cache.published_layer(g, objects);
-        published
+        published.parts()[0]
             .segment
             .node_indexes
             .iter()

@@ -1,6 +1,7 @@
 //! The synthetic segment content of `ygg-test-writer`, and its check.
 //!
-//! A synthetic layer segment is `YGGT`, the layer id (u32 LE), the generation (u64 LE), then
+//! A synthetic layer segment is `YGGT`, four zero bytes, the segment id (u64 LE), the
+//! generation (u64 LE), then
 //! one byte repeated. Readers use it to verify that a snapshot pairs every layer with the
 //! generation its manifest names. It is a transport test aid, not part of the protocol.
 
@@ -10,12 +11,12 @@ use ygg_transport::protocol::ManifestEntry;
 pub const MAGIC: &[u8; 4] = b"YGGT";
 
 /// Smallest synthetic segment.
-pub const MIN_LEN: usize = 16;
+pub const MIN_LEN: usize = 24;
 
-/// The byte repeated after the 16-byte head.
-pub fn fill_byte(layer_id: u32, generation: u64) -> u8 {
+/// The byte repeated after the 24-byte head.
+pub fn fill_byte(layer_id: u64, generation: u64) -> u8 {
     // Truncation intended: any byte that depends on both values.
-    (u64::from(layer_id).wrapping_mul(31) ^ generation) as u8
+    (layer_id.wrapping_mul(31) ^ generation) as u8
 }
 
 /// Writes the synthetic segment of `layer_id` / `generation` into `buf`.
@@ -23,11 +24,12 @@ pub fn fill_byte(layer_id: u32, generation: u64) -> u8 {
 /// # Panics
 ///
 /// If `buf` is shorter than [`MIN_LEN`].
-pub fn write(buf: &mut [u8], layer_id: u32, generation: u64) {
+pub fn write(buf: &mut [u8], layer_id: u64, generation: u64) {
     let (head, rest) = buf.split_at_mut(MIN_LEN);
     head[0..4].copy_from_slice(MAGIC);
-    head[4..8].copy_from_slice(&layer_id.to_le_bytes());
-    head[8..16].copy_from_slice(&generation.to_le_bytes());
+    head[4..8].fill(0);
+    head[8..16].copy_from_slice(&layer_id.to_le_bytes());
+    head[16..24].copy_from_slice(&generation.to_le_bytes());
     rest.fill(fill_byte(layer_id, generation));
 }
 
@@ -46,11 +48,11 @@ pub fn check(bytes: &[u8], entry: ManifestEntry) -> Result<(), String> {
     if !is_synthetic(bytes) {
         return Err(format!("layer {}: not a synthetic segment", entry.layer_id));
     }
-    let mut id = [0; 4];
-    id.copy_from_slice(&bytes[4..8]);
+    let mut id = [0; 8];
+    id.copy_from_slice(&bytes[8..16]);
     let mut generation = [0; 8];
-    generation.copy_from_slice(&bytes[8..16]);
-    let (id, generation) = (u32::from_le_bytes(id), u64::from_le_bytes(generation));
+    generation.copy_from_slice(&bytes[16..24]);
+    let (id, generation) = (u64::from_le_bytes(id), u64::from_le_bytes(generation));
     if (id, generation) != (entry.layer_id, entry.generation) {
         return Err(format!(
             "layer {} generation {} holds layer {id} generation {generation}",

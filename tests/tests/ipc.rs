@@ -567,7 +567,7 @@ struct FakeWriter {
 }
 
 impl FakeWriter {
-    const LAYER: u32 = 7;
+    const LAYER: u64 = 7;
 
     fn new(scene: &TestScene) -> Self {
         let names = service::SceneServices::new(&scene.name).expect("scene name");

@@ -10,7 +10,7 @@ use rustix::process::Signal;
 use ygg_dsg::layout;
 use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
-use ygg_store::snapshot::is_chunk_segment_id;
+use ygg_store::snapshot::{is_chunk_segment_id, part_segment_id};
 use ygg_store::{LayerId, NodeId, SceneGraph, SceneView, Scope};
 use ygg_testkit::{Proc, TestScene, Watchdog, catches_signal, wait_until};
 use ygg_transport::PublisherBuilder;
@@ -145,7 +145,7 @@ fn corrupted_archive_bytes_are_refused_by_the_reader() {
     // A layer whose archive is damaged after the transport header (which stays valid).
     publisher
         .publish_layer(
-            rooms.0,
+            part_segment_id(rooms, 0).expect("fits"),
             g.layer_generation(rooms).expect("gen"),
             len,
             |buf| {
@@ -200,9 +200,14 @@ fn publish_segment(
     let segment = g.layer_segment(layer);
     let generation = g.layer_generation(layer).expect("layer generation");
     publisher
-        .publish_layer(layer.0, generation, segment.archived_len(), |buf| {
-            segment.archive_into(buf).expect("fits");
-        })
+        .publish_layer(
+            part_segment_id(layer, 0).expect("fits"),
+            generation,
+            segment.archived_len(),
+            |buf| {
+                segment.archive_into(buf).expect("fits");
+            },
+        )
         .expect("publish layer");
 }
 
@@ -219,7 +224,7 @@ fn publish_cut(
         .layers
         .iter()
         .map(|e| ygg_transport::ManifestEntry {
-            layer_id: e.id,
+            layer_id: part_segment_id(LayerId(e.id), 0).expect("fits"),
             generation: e.generation,
         })
         .collect();
@@ -381,7 +386,7 @@ fn a_growing_mesh_resends_only_its_changed_chunks_and_readers_validate_only_thos
     writer.expect_line(STEP, |l| l.contains("\"ready\""));
     let mut reader = attach(&scene);
     let mut previous = snapshot_after(&mut reader, 1);
-    let segment_generations = |s: &SceneSnapshot| -> BTreeMap<u32, u64> {
+    let segment_generations = |s: &SceneSnapshot| -> BTreeMap<u64, u64> {
         s.raw()
             .layers()
             .map(|(e, _)| (e.layer_id, e.generation))
@@ -394,7 +399,7 @@ fn a_growing_mesh_resends_only_its_changed_chunks_and_readers_validate_only_thos
         let validated = reader.validations();
         let next = snapshot_after(&mut reader, previous.generation() + 1);
         let (before, after) = (segment_generations(&previous), segment_generations(&next));
-        let new: Vec<u32> = after
+        let new: Vec<u64> = after
             .iter()
             .filter(|(id, g)| before.get(id) != Some(g))
             .map(|(id, _)| *id)

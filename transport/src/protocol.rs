@@ -16,7 +16,7 @@
 //! | `ygg/<scene>/readers` | event | readers -> writer | [`EVENT_READER_HELLO`] (a catch-up request) |
 //!
 //! A segment is identified by its header: kind, segment id ([`SegmentHeader::layer_id`], an
-//! opaque `u32` to the transport), writer session and generation. A manifest is a
+//! opaque `u64` to the transport), writer session and generation. A manifest is a
 //! [manifest prefix](encode_manifest_prefix) followed by the store's manifest bytes. A
 //! *catch-up burst* ([`FLAG_CATCH_UP`]) is a copy of every segment of the current snapshot
 //! followed by its manifest, sent when a reader asks: a reader that connects, or that lost
@@ -48,10 +48,11 @@ pub const SEGMENT_MAGIC: u32 = u32::from_le_bytes(*b"YGGS");
 /// `"YGGM"`: magic number at the start of a manifest payload.
 pub const MANIFEST_MAGIC: u32 = u32::from_le_bytes(*b"YGGM");
 
-/// Version of this protocol; readers reject segments of another version. Version 3 carries
-/// all segments of a scene over one stream service plus a catch-up service (version 2 had a
-/// service per layer).
-pub const PROTOCOL_VERSION: u16 = 3;
+/// Version of this protocol; readers reject segments of another version. Version 4 has
+/// 64-bit segment ids (a layer's parts and their chunks); version 3 carried all segments of
+/// a scene over one stream service plus a catch-up service (version 2 had a service per
+/// layer).
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Most layers one manifest may name.
 pub const MAX_LAYERS: usize = 4096;
@@ -134,7 +135,7 @@ impl SegmentKind {
 }
 
 /// Layer id written into the header of a manifest segment.
-pub const MANIFEST_LAYER_ID: u32 = u32::MAX;
+pub const MANIFEST_LAYER_ID: u64 = u64::MAX;
 
 /// The iceoryx2 user header of every segment.
 #[repr(C)]
@@ -146,11 +147,13 @@ pub struct SegmentHeader {
     pub version: u16,
     /// [`SegmentKind`] as `u16`.
     pub kind: u16,
-    /// The segment id (a layer, or a chunk of one; opaque to the transport), or
-    /// [`MANIFEST_LAYER_ID`] for a manifest.
-    pub layer_id: u32,
     /// [`FLAG_CATCH_UP`] for a catch-up copy, else zero.
     pub flags: u32,
+    /// Zero.
+    pub reserved: u32,
+    /// The segment id (a layer's part, or a chunk of one; opaque to the transport), or
+    /// [`MANIFEST_LAYER_ID`] for a manifest.
+    pub layer_id: u64,
     /// Random id of the writer instance; a restarted writer has a new one.
     pub session: u64,
     /// Layer generation, or snapshot generation for a manifest.
@@ -167,7 +170,7 @@ impl SegmentHeader {
     /// Header for a segment of `kind` with the given identity and length.
     pub fn new(
         kind: SegmentKind,
-        layer_id: u32,
+        layer_id: u64,
         session: u64,
         generation: u64,
         len: u64,
@@ -177,8 +180,9 @@ impl SegmentHeader {
             magic: SEGMENT_MAGIC,
             version: PROTOCOL_VERSION,
             kind: kind as u16,
-            layer_id,
             flags: 0,
+            reserved: 0,
+            layer_id,
             session,
             generation,
             len,
@@ -228,9 +232,9 @@ pub enum SegmentError {
     #[error("segment id {found} where {expected} was expected")]
     LayerIdMismatch {
         /// The id expected.
-        expected: u32,
+        expected: u64,
         /// The id in the header.
-        found: u32,
+        found: u64,
     },
     /// The header claims more bytes than the payload holds.
     #[error("segment claims {len} bytes but its payload holds only {payload}")]
@@ -270,7 +274,7 @@ pub enum SegmentError {
     #[error("manifest layer ids are not strictly increasing at layer {layer_id}")]
     UnsortedLayers {
         /// The first layer id out of order.
-        layer_id: u32,
+        layer_id: u64,
     },
 }
 
@@ -284,7 +288,7 @@ pub enum SegmentError {
 pub fn check_segment_header(
     header: &SegmentHeader,
     expected_kind: SegmentKind,
-    expected_layer: Option<u32>,
+    expected_layer: Option<u64>,
     payload_bytes: usize,
 ) -> Result<usize, SegmentError> {
     if header.magic != SEGMENT_MAGIC {
@@ -354,8 +358,8 @@ pub fn check_stream_header(
 /// One line of the transport-level manifest: which generation of a layer a snapshot uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct ManifestEntry {
-    /// The layer id (the number in the layer's service name).
-    pub layer_id: u32,
+    /// The segment id.
+    pub layer_id: u64,
     /// The generation of the layer segment that belongs to the snapshot.
     pub generation: u64,
 }
@@ -372,7 +376,7 @@ pub const fn manifest_prefix_len(count: usize) -> usize {
 /// 0   magic  u32 = MANIFEST_MAGIC
 /// 4   count  u32
 /// 8   zero   u64
-/// 16  count x { layer_id u32, zero u32, generation u64 }
+/// 16  count x { segment id u64, generation u64 }
 ///     zero padding up to manifest_prefix_len(count)
 /// ```
 ///
@@ -389,7 +393,7 @@ pub fn encode_manifest_prefix(entries: &[ManifestEntry], out: &mut [u8]) {
     prefix[4..8].copy_from_slice(&(entries.len() as u32).to_le_bytes());
     for (i, entry) in entries.iter().enumerate() {
         let at = MANIFEST_FIXED_LEN + i * MANIFEST_ENTRY_LEN;
-        prefix[at..at + 4].copy_from_slice(&entry.layer_id.to_le_bytes());
+        prefix[at..at + 8].copy_from_slice(&entry.layer_id.to_le_bytes());
         prefix[at + 8..at + 16].copy_from_slice(&entry.generation.to_le_bytes());
     }
 }
@@ -428,12 +432,12 @@ pub fn decode_manifest_prefix(bytes: &[u8]) -> Result<(Vec<ManifestEntry>, usize
     let mut entries = Vec::with_capacity(count);
     for i in 0..count {
         let at = MANIFEST_FIXED_LEN + i * MANIFEST_ENTRY_LEN;
-        let mut id = [0; 4];
-        id.copy_from_slice(&bytes[at..at + 4]);
+        let mut id = [0; 8];
+        id.copy_from_slice(&bytes[at..at + 8]);
         let mut generation = [0; 8];
         generation.copy_from_slice(&bytes[at + 8..at + 16]);
         let entry = ManifestEntry {
-            layer_id: u32::from_le_bytes(id),
+            layer_id: u64::from_le_bytes(id),
             generation: u64::from_le_bytes(generation),
         };
         if entries

@@ -1,10 +1,12 @@
 //! [`SceneWriter`]: a live [`SceneGraph`] published through shared memory, one segment
 //! per changed layer plus a manifest.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::time::Duration;
-use ygg_store::snapshot::{MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, SegmentCache};
+use ygg_store::snapshot::{
+    MAX_LAYER_ID, MAX_PART_ROWS, MAX_POINT_CHUNK_LEN, PART_ROWS, POINT_CHUNK_LEN, SegmentCache,
+};
 use ygg_store::{LayerId, SceneGraph, SceneView, SnapshotError, TouchMark};
 use ygg_transport::ManifestEntry;
 use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCreateError};
@@ -14,8 +16,11 @@ use ygg_transport::{PublishError, PublisherBuilder, SegmentPublisher, WriterCrea
 pub struct PublishReport {
     /// The snapshot generation published.
     pub generation: u64,
-    /// Layers whose segment was (re)published.
+    /// Layers of which a part was (re)published.
     pub layers_sent: usize,
+    /// Parts (row chunks) of layers (re)published: a layer sends only its parts whose
+    /// rows changed.
+    pub parts_sent: usize,
     /// Chunks (re)published: point chunks whose points changed, and layer index trees
     /// built anew.
     pub chunks_sent: usize,
@@ -44,8 +49,10 @@ pub struct SceneWriter {
     /// The segments and manifest last published, rebuilt incrementally.
     segments: SegmentCache,
     publisher: SegmentPublisher,
-    /// Ids of the segments (layers and point chunks) of the last published cut.
-    published_segments: BTreeSet<u32>,
+    /// Ids of the segments (parts, point and tree chunks) of the last published cut.
+    published_segments: BTreeSet<u64>,
+    /// Each layer's generation as last published.
+    published_generation: HashMap<LayerId, u64>,
     /// What the last successful publish left for the next one to patch.
     last_cut: Option<LastCut>,
     generation: u64,
@@ -68,13 +75,16 @@ pub struct SceneWriterBuilder {
     publisher: PublisherBuilder,
     max_layers: Option<usize>,
     point_chunk_len: usize,
+    part_rows: usize,
 }
 
 /// Least room for more layers a writer gets by default ([`SceneWriterBuilder::max_layers`]).
-pub const MIN_DEFAULT_MAX_LAYERS: usize = 64;
+pub const MIN_DEFAULT_MAX_LAYERS: usize = 256;
 
 /// The layer bound of a writer created on a graph of `layers` layers when none is set: room
-/// for a quarter more layers and at least 64 more, rounded up to a multiple of 64, at most
+/// for a quarter more segments and at least 256 more (a layer that grows over a mission
+/// is split into parts, about one per [`MAX_PART_ROWS`] rows plus a few: a
+/// 100,000-node mission adds about 100), rounded up to a multiple of 64, at most
 /// [`ygg_transport::protocol::MAX_LAYERS`]. Tight on purpose: attaching to the 103-room
 /// office (418 layers) took 44 ms at a bound of 896 and 34 ms at 512.
 pub fn default_max_layers(layers: usize) -> usize {
@@ -93,10 +103,10 @@ impl SceneWriterBuilder {
         self
     }
 
-    /// Most segments a snapshot may have while this writer publishes it: its layers plus
-    /// the point chunks of its chunked layers ([`Self::point_chunk_len`]). Default: a
-    /// quarter more than the graph given to [`create`](Self::create) takes, and at least 64
-    /// more; see [`default_max_layers`].
+    /// Most segments a snapshot may have while this writer publishes it: its layers' parts
+    /// plus their point and tree chunks ([`Self::point_chunk_len`]). Default: a quarter
+    /// more than the graph given to [`create`](Self::create) takes, and at least 256 more;
+    /// see [`default_max_layers`].
     /// A publish of more fails with [`PublishError::TooManyLayers`]. The bound sizes the
     /// shared-memory pool and what every reader initialises when it attaches (attaching to
     /// the office took 15 ms at 128 and 25 ms at 512), so set it for a scene that is
@@ -113,6 +123,14 @@ impl SceneWriterBuilder {
     /// resend less per change but add segments to every cut.
     pub fn point_chunk_len(mut self, value: usize) -> Self {
         self.point_chunk_len = value.clamp(1, MAX_POINT_CHUNK_LEN).next_power_of_two();
+        self
+    }
+
+    /// Rows the newest part of a layer takes before a new part starts (default
+    /// [`PART_ROWS`]; at least 1): appending a node resends at most this many rows of its
+    /// layer. Sealed parts merge up to [`MAX_PART_ROWS`] rows.
+    pub fn part_rows(mut self, value: usize) -> Self {
+        self.part_rows = value.max(1);
         self
     }
 
@@ -156,9 +174,11 @@ impl SceneWriterBuilder {
             .unwrap_or_else(|| default_max_layers(graph.snapshot_segments(self.point_chunk_len)));
         Ok(SceneWriter {
             graph,
-            segments: SegmentCache::with_point_chunk_len(self.point_chunk_len),
+            segments: SegmentCache::with_point_chunk_len(self.point_chunk_len)
+                .with_part_rows(self.part_rows, MAX_PART_ROWS.max(self.part_rows)),
             publisher: self.publisher.max_segments(max_layers).create()?,
             published_segments: BTreeSet::new(),
+            published_generation: HashMap::new(),
             last_cut: None,
             generation: 0,
         })
@@ -173,6 +193,7 @@ impl SceneWriter {
             publisher: PublisherBuilder::new(scene),
             max_layers: None,
             point_chunk_len: POINT_CHUNK_LEN,
+            part_rows: PART_ROWS,
         }
     }
 
@@ -229,34 +250,30 @@ impl SceneWriter {
         let incremental = touched.is_some();
         let candidates = match touched {
             Some(touched) => touched,
-            None => {
-                let layers: Vec<_> = self.graph.layers().collect();
-                if let Some(layer) = layers.iter().find(|l| l.0 > MAX_LAYER_ID) {
-                    return Err(PublishError::LayerIdTooLarge {
-                        layer_id: layer.0,
-                        max: MAX_LAYER_ID,
-                    });
-                }
-                layers
-            }
+            None => self.graph.layers().collect(),
         };
+        if let Some(layer) = candidates.iter().find(|l| l.0 > MAX_LAYER_ID) {
+            return Err(PublishError::ReservedLayerId(u64::from(layer.0)));
+        }
         let changed: Vec<LayerId> = candidates
             .into_iter()
-            .filter(|l| self.publisher.layer_generation(l.0) != self.graph.layer_generation(*l))
+            .filter(|l| {
+                self.published_generation.get(l) != self.graph.layer_generation(*l).as_ref()
+            })
             .collect();
         // Changed layers are brought up to date first, so that the cut's segments are
-        // counted (a layer's point chunks may have grown) before any goes out.
+        // counted (a layer's parts and chunks may have changed) before any goes out.
         let mut reshaped = false;
         for layer in &changed {
-            let before = self.segments.published(*layer).map(|p| p.chunk_shape());
+            let before = self.segments.published(*layer).map(|p| p.shape());
             let after = self
                 .segments
                 .published_layer(&mut self.graph, *layer)
-                .chunk_shape();
-            reshaped |= before != Some(after);
+                .shape();
+            reshaped |= before.as_ref() != Some(&after);
         }
         let layer_count = self.graph.layer_count();
-        let segments = layer_count + self.segments.chunk_segments();
+        let segments = layer_count + self.segments.extra_segments();
         if segments > self.max_layers() {
             // Refused before any segment goes out, so readers see nothing of this cut.
             return Err(PublishError::TooManyLayers {
@@ -270,42 +287,47 @@ impl SceneWriter {
             ..PublishReport::default()
         };
         for layer in &changed {
-            let generation = self.graph.layer_generation(*layer).expect("listed layer");
             let published = self.segments.published(*layer).expect("brought up to date");
-            let len = published.segment.archived_len();
-            self.publisher
-                .try_publish_layer(layer.0, generation, len, |buf| {
-                    published.segment.archive_into(buf).map(|_| ())
-                })?;
             report.layers_sent += 1;
-            report.bytes_sent += len;
-            for (index, (id, chunk_generation)) in published.chunks().enumerate() {
-                if self.publisher.layer_generation(id) != Some(chunk_generation) {
-                    let chunk = published.chunk(index);
+            for part in published.parts() {
+                let id = part.segment_id();
+                if self.publisher.layer_generation(id) != Some(part.segment.generation) {
+                    let len = part.segment.archived_len();
+                    self.publisher
+                        .try_publish_layer(id, part.segment.generation, len, |buf| {
+                            part.segment.archive_into(buf).map(|_| ())
+                        })?;
+                    report.parts_sent += 1;
+                    report.bytes_sent += len;
+                }
+                for (index, (id, chunk_generation)) in part.chunks().enumerate() {
+                    if self.publisher.layer_generation(id) != Some(chunk_generation) {
+                        let chunk = part.chunk(index);
+                        let len = chunk.archived_len();
+                        send_chunk(
+                            &mut self.publisher,
+                            &mut report,
+                            id,
+                            chunk_generation,
+                            len,
+                            |buf| chunk.archive_into(buf),
+                        )?;
+                    }
+                }
+                for (id, tree_generation, chunk) in part.tree_chunks() {
+                    if self.publisher.layer_generation(id) == Some(tree_generation) {
+                        continue;
+                    }
                     let len = chunk.archived_len();
                     send_chunk(
                         &mut self.publisher,
                         &mut report,
                         id,
-                        chunk_generation,
+                        tree_generation,
                         len,
                         |buf| chunk.archive_into(buf),
                     )?;
                 }
-            }
-            for (id, tree_generation, chunk) in published.tree_chunks() {
-                if self.publisher.layer_generation(id) == Some(tree_generation) {
-                    continue;
-                }
-                let len = chunk.archived_len();
-                send_chunk(
-                    &mut self.publisher,
-                    &mut report,
-                    id,
-                    tree_generation,
-                    len,
-                    |buf| chunk.archive_into(buf),
-                )?;
             }
         }
         let entries = match last {
@@ -330,6 +352,10 @@ impl SceneWriter {
         self.generation = generation;
         report.generation = generation;
         report.bytes_sent += len;
+        for layer in &changed {
+            let g = self.graph.layer_generation(*layer).expect("listed layer");
+            self.published_generation.insert(*layer, g);
+        }
         self.last_cut = Some(LastCut {
             structure,
             mark,
@@ -338,60 +364,35 @@ impl SceneWriter {
         Ok(report)
     }
 
-    /// Sets the generations of the changed layers and their chunks in the last cut's
-    /// entries (ascending by segment id; the layers' chunk shapes are unchanged).
+    /// Sets the generations of the changed layers' parts and chunks in the last cut's
+    /// entries (ascending by segment id; the layers' shapes are unchanged).
     fn patch_entries(&self, entries: &mut [ManifestEntry], changed: &[LayerId]) {
-        let mut set = |id: u32, generation: u64| {
-            if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
-                entries[i].generation = generation;
-            }
-        };
         for layer in changed {
-            set(
-                layer.0,
-                self.graph.layer_generation(*layer).expect("listed layer"),
-            );
             let published = self.segments.published(*layer).expect("brought up to date");
-            for (id, generation) in published.chunks() {
-                set(id, generation);
-            }
-            for (id, generation, _) in published.tree_chunks() {
-                set(id, generation);
+            for (id, generation) in published.segments() {
+                if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
+                    entries[i].generation = generation;
+                }
             }
         }
     }
 
     /// The entries of the cut, built afresh from every layer (ascending by segment id:
-    /// layers, then point chunks by layer in column order, then tree chunks by layer),
-    /// retiring the ids of the last cut that are gone.
+    /// parts, then point chunks, then tree chunks), retiring the ids of the last cut that
+    /// are gone.
     fn cut_entries(&mut self) -> Vec<ManifestEntry> {
-        let layers: Vec<_> = self.graph.layers().collect();
-        let mut entries: Vec<ManifestEntry> = layers
-            .iter()
-            .map(|l| ManifestEntry {
-                layer_id: l.0,
-                generation: self.graph.layer_generation(*l).expect("listed layer"),
+        let mut entries: Vec<ManifestEntry> = self
+            .graph
+            .layers()
+            .filter_map(|l| self.segments.published(l))
+            .flat_map(|published| published.segments())
+            .map(|(layer_id, generation)| ManifestEntry {
+                layer_id,
+                generation,
             })
             .collect();
-        for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
-            entries.extend(
-                published
-                    .chunks()
-                    .map(|(layer_id, generation)| ManifestEntry {
-                        layer_id,
-                        generation,
-                    }),
-            );
-        }
-        for published in layers.iter().filter_map(|l| self.segments.published(*l)) {
-            entries.extend(published.tree_chunks().map(|(layer_id, generation, _)| {
-                ManifestEntry {
-                    layer_id,
-                    generation,
-                }
-            }));
-        }
-        let live: BTreeSet<u32> = entries.iter().map(|e| e.layer_id).collect();
+        entries.sort_unstable_by_key(|e| e.layer_id);
+        let live: BTreeSet<u64> = entries.iter().map(|e| e.layer_id).collect();
         for gone in self.published_segments.difference(&live) {
             self.publisher.retire_layer(*gone);
         }
@@ -405,7 +406,7 @@ impl SceneWriter {
 fn send_chunk(
     publisher: &mut SegmentPublisher,
     report: &mut PublishReport,
-    id: u32,
+    id: u64,
     generation: u64,
     len: usize,
     archive: impl FnOnce(&mut [u8]) -> Result<usize, SnapshotError>,
@@ -421,13 +422,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_default_layer_bound_leaves_a_quarter_and_at_least_64_more_in_steps_of_64() {
-        assert_eq!(default_max_layers(0), 64);
-        assert_eq!(default_max_layers(1), 128);
-        assert_eq!(default_max_layers(42), 128);
-        assert_eq!(default_max_layers(64), 128);
-        assert_eq!(default_max_layers(65), 192);
-        assert_eq!(default_max_layers(418), 576);
+    fn the_default_layer_bound_leaves_a_quarter_and_at_least_256_more_in_steps_of_64() {
+        assert_eq!(default_max_layers(0), 256);
+        assert_eq!(default_max_layers(1), 320);
+        assert_eq!(default_max_layers(42), 320);
+        assert_eq!(default_max_layers(64), 320);
+        assert_eq!(default_max_layers(65), 384);
+        assert_eq!(default_max_layers(418), 704);
         assert_eq!(default_max_layers(4000), 4096);
         assert_eq!(
             default_max_layers(usize::MAX),

@@ -40,7 +40,7 @@ mod live;
 mod spatial_index;
 mod walk;
 
-pub use archived::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree};
+pub use archived::{ArchivedIndex, ArchivedKdTree, KdIndex, KdTree, PartedIndex};
 pub(crate) use archived::{RowPatch, build_tree, check_tree};
 pub use from_view::{IndexCache, build_layer_index, build_subtree_index};
 pub(crate) use live::{Entry, LiveIndexes, Located, NO_HANDLE, OverlaidTree};

@@ -47,11 +47,15 @@ mod schema;
 
 pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use chunking::{
-    MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN,
-    TREE_CHUNK_MIN_POINTS, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer,
-    is_chunk_segment_id, is_tree_chunk_segment_id, tree_chunk_segment_id,
+    MANIFEST_SEGMENT_ID, MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_PART_ROWS, MAX_PARTS_PER_LAYER,
+    MAX_POINT_CHUNK_LEN, PART_ITEM_ROW_BITS, PART_ROWS, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS,
+    WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer, is_chunk_segment_id,
+    is_part_segment_id, is_tree_chunk_segment_id, part_segment_id, segment_layer_part,
+    tree_chunk_segment_id,
 };
-pub use publish::{ChunkShape, PointChunkSource, PublishedLayer, SegmentCache, TreeChunkSource};
+pub use publish::{
+    PointChunkSource, PublishedLayer, PublishedParts, SegmentCache, TreeChunkSource,
+};
 pub use read::{
     ArchivedNodeRef, ArchivedScene, CheckedManifest, FILE_MAGIC, KnownParts, SnapshotFile,
     check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,

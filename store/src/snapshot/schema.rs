@@ -7,19 +7,23 @@ use rkyv::{Archive, Serialize};
 use std::collections::HashMap;
 
 /// Version of the archived layout; bumped on every incompatible change.
-pub const FORMAT_VERSION: u32 = 9;
+pub const FORMAT_VERSION: u32 = 10;
 
 /// Marks "no parent" in the parent column.
 pub(crate) const NO_PARENT: u64 = u64::MAX;
 
-/// One layer, as archived: columns indexed by row (rank of the node id in the layer).
+/// One layer, or one part of a layer split into parts (its rows over a range of ids), as
+/// archived: columns indexed by row (rank of the node id in the part).
 #[derive(Archive, Serialize, Debug, Default)]
 pub struct LayerSegment {
     /// [`FORMAT_VERSION`] of the writer.
     pub version: u32,
     /// The layer's id.
     pub layer: u32,
-    /// The layer's generation.
+    /// The part's number within its layer (0 for a layer in one piece); the manifest
+    /// lists a layer's part numbers in id order.
+    pub part: u32,
+    /// The generation of the part: the layer generation at which its rows last changed.
     pub generation: u64,
     /// The layer's name.
     pub name: String,
@@ -46,14 +50,15 @@ pub struct LayerSegment {
     pub by_parent: Vec<u32>,
     /// CSR offsets into `out_targets` / `out_descriptions`.
     pub out_offsets: Vec<u32>,
-    /// Target rows of out-edges, ascending by target id per row.
-    pub out_targets: Vec<u32>,
+    /// Target node ids of out-edges, ascending per row (edges stay within the layer,
+    /// but may cross parts).
+    pub out_targets: Vec<u64>,
     /// Description (string index) of each out-edge.
     pub out_descriptions: Vec<u32>,
     /// CSR offsets into `in_sources` / `in_descriptions`.
     pub in_offsets: Vec<u32>,
-    /// Source rows of in-edges, ascending by source id per row.
-    pub in_sources: Vec<u32>,
+    /// Source node ids of in-edges, ascending per row.
+    pub in_sources: Vec<u64>,
     /// Description (string index) of each in-edge.
     pub in_descriptions: Vec<u32>,
     /// CSR offsets into `labels`.
@@ -105,6 +110,8 @@ pub struct PointChunk {
     pub version: u32,
     /// The layer whose column this is part of.
     pub layer: u32,
+    /// The layer's part whose column this is part of.
+    pub part: u32,
     /// The chunk's place in the column.
     pub index: u32,
     /// The chunk's generation (see [`PointChunkRef::generation`]).
@@ -132,6 +139,8 @@ pub struct TreeChunk {
     pub version: u32,
     /// The layer whose tree this is.
     pub layer: u32,
+    /// The layer's part whose tree this is.
+    pub part: u32,
     /// The tree's place among its layer's tree chunks (0: the layer index's base tree;
     /// `1 + i`: the tree of node index `i` of the layer segment).
     pub slot: u32,
@@ -200,7 +209,7 @@ pub struct ManifestLayer {
     pub id: u32,
     /// The layer's name.
     pub name: String,
-    /// The generation of the layer segment that belongs to this cut.
+    /// The layer's generation in this cut (each part's generation is at most it).
     pub generation: u64,
     /// Number of nodes.
     pub node_count: u64,
@@ -212,6 +221,9 @@ pub struct ManifestLayer {
     pub parents: Vec<u32>,
     /// DAG children, ascending.
     pub children: Vec<u32>,
+    /// The numbers of the layer's parts, in ascending order of their ids (`[0]` for a
+    /// layer in one piece): each part's rows lie below the next part's.
+    pub parts: Vec<u32>,
 }
 
 /// The manifest: which layers at which generations form one consistent cut, the layer

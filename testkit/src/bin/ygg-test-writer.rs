@@ -105,14 +105,14 @@ fn serve_test(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         if due && (published == 0 || args.rate > 0.0) {
             generation += 1;
             if published == 0 {
-                for layer in 0..args.layers {
+                for layer in 0..u64::from(args.layers) {
                     publish_test_layer(&mut writer, layer, generation, args.bytes)?;
                 }
             } else {
-                let layer = u32::try_from(generation % u64::from(args.layers))?;
+                let layer = generation % u64::from(args.layers);
                 publish_test_layer(&mut writer, layer, generation, args.bytes)?;
             }
-            let entries: Vec<ManifestEntry> = (0..args.layers)
+            let entries: Vec<ManifestEntry> = (0..u64::from(args.layers))
                 .filter_map(|layer_id| {
                     writer
                         .layer_generation(layer_id)
@@ -144,7 +144,7 @@ fn serve_test(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 
 fn publish_test_layer(
     writer: &mut SegmentPublisher,
-    layer: u32,
+    layer: u64,
     generation: u64,
     bytes: usize,
 ) -> Result<(), PublishError> {

@@ -52,7 +52,7 @@ pub enum PublishError {
     },
     /// The segment id is reserved for manifests.
     #[error("layer id {0} is reserved")]
-    ReservedLayerId(u32),
+    ReservedLayerId(u64),
     /// A manifest names more segments than the writer was built for
     /// ([`PublisherBuilder::max_segments`](crate::PublisherBuilder::max_segments)).
     #[error(
@@ -64,19 +64,11 @@ pub enum PublishError {
         /// The limit.
         max: usize,
     },
-    /// A layer id in the range that names other segments (the store's point chunks).
-    #[error("layer id {layer_id} is above the largest publishable id {max}")]
-    LayerIdTooLarge {
-        /// The layer id.
-        layer_id: u32,
-        /// The largest id a layer may have.
-        max: u32,
-    },
     /// The manifest's layer ids are not strictly increasing.
     #[error("manifest entries must be sorted by layer id without duplicates (at layer {layer_id})")]
     UnsortedManifest {
         /// The first layer out of order.
-        layer_id: u32,
+        layer_id: u64,
     },
     /// A manifest names a layer generation that is not the last one published for that layer,
     /// so no reader could find it.
@@ -86,7 +78,7 @@ pub enum PublishError {
     )]
     UnknownLayerGeneration {
         /// The layer.
-        layer_id: u32,
+        layer_id: u64,
         /// The generation the manifest names.
         generation: u64,
         /// The last generation published for the layer, if any.

@@ -65,7 +65,7 @@ pub struct ChunkPages {
     /// then map a new pool whose chunks reuse old addresses.
     backed: HashMap<usize, usize>,
     /// Bytes of the newest segment of each id, and their sum.
-    newest: HashMap<u32, usize>,
+    newest: HashMap<u64, usize>,
     newest_total: usize,
     /// Resident bytes below which nothing is released ([`RESIDENT_FLOOR`]) and the multiple
     /// of `newest_total` likewise ([`RESIDENT_FACTOR`]).
@@ -131,7 +131,7 @@ impl ChunkPages {
         &mut self,
         payload: usize,
         total: usize,
-        id: u32,
+        id: u64,
         len: usize,
     ) -> Option<(usize, usize)> {
         let old_len = self.newest.insert(id, len).unwrap_or(0);

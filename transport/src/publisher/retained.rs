@@ -28,9 +28,9 @@ struct Slots {
 /// The writer's own subscription to its segment stream and the samples it keeps.
 pub(crate) struct Retained {
     subscriber: Subscriber<Ipc, [Block128], SegmentHeader>,
-    segments: BTreeMap<u32, Slots>,
+    segments: BTreeMap<u64, Slots>,
     /// Segment ids published since the last manifest.
-    touched: Vec<u32>,
+    touched: Vec<u64>,
     manifest: Option<RetainedSample>,
     /// What `manifest` names.
     entries: Vec<ManifestEntry>,
@@ -92,7 +92,7 @@ impl Retained {
     }
 
     /// Forgets segment `id` (retired by the writer).
-    pub(crate) fn forget(&mut self, id: u32) {
+    pub(crate) fn forget(&mut self, id: u64) {
         self.segments.remove(&id);
     }
 

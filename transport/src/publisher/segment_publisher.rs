@@ -228,7 +228,7 @@ pub struct SegmentPublisher {
     max_segments: usize,
     services: SceneServices,
     /// Last generation published per layer, to check manifests.
-    published: BTreeMap<u32, u64>,
+    published: BTreeMap<u64, u64>,
     /// When the cut being published began ([`SegmentPublisher::start_cut`]).
     cut_started_unix_ns: Option<u64>,
     inner: Arc<Mutex<Inner>>,
@@ -268,7 +268,7 @@ impl SegmentPublisher {
     }
 
     /// The last generation published for `layer_id`, if any.
-    pub fn layer_generation(&self, layer_id: u32) -> Option<u64> {
+    pub fn layer_generation(&self, layer_id: u64) -> Option<u64> {
         self.published.get(&layer_id).copied()
     }
 
@@ -284,7 +284,7 @@ impl SegmentPublisher {
     /// see [`PublishError`] for the rest.
     pub fn publish_layer(
         &mut self,
-        layer_id: u32,
+        layer_id: u64,
         generation: u64,
         len: usize,
         fill: impl FnOnce(&mut [u8]),
@@ -303,7 +303,7 @@ impl SegmentPublisher {
     /// As [`publish_layer`](Self::publish_layer), plus [`PublishError::Fill`].
     pub fn try_publish_layer<E>(
         &mut self,
-        layer_id: u32,
+        layer_id: u64,
         generation: u64,
         len: usize,
         fill: impl FnOnce(&mut [u8]) -> Result<(), E>,
@@ -439,7 +439,7 @@ impl SegmentPublisher {
     /// Stops publishing segment `layer_id`: the writer lets go of its last sample, whose
     /// shared memory is reused once no reader holds it. Publish a manifest without the
     /// segment first.
-    pub fn retire_layer(&mut self, layer_id: u32) {
+    pub fn retire_layer(&mut self, layer_id: u64) {
         if let Some(stream) = &mut lock(&self.inner).stream {
             stream.retained.forget(layer_id);
         }

@@ -28,9 +28,9 @@ pub(crate) struct PendingManifest {
 #[derive(Default)]
 pub(crate) struct Assembly {
     /// Segments newer than the current snapshot's, the newest per id.
-    held: BTreeMap<u32, Arc<HeldSegment>>,
+    held: BTreeMap<u64, Arc<HeldSegment>>,
     /// The segments of the catch-up burst being received, until its manifest.
-    burst: BTreeMap<u32, Arc<HeldSegment>>,
+    burst: BTreeMap<u64, Arc<HeldSegment>>,
     /// The newest manifest that could not be assembled yet.
     pending: Option<PendingManifest>,
     current: Option<Arc<Snapshot>>,
@@ -129,7 +129,7 @@ impl Assembly {
     }
 
     /// Keeps `segment` as the newest of `id` unless a newer one of the same session is kept.
-    fn keep(&mut self, id: u32, segment: Arc<HeldSegment>) {
+    fn keep(&mut self, id: u64, segment: Arc<HeldSegment>) {
         let (session, generation) = segment.version();
         match self.held.get(&id) {
             Some(old)
@@ -186,7 +186,7 @@ impl Assembly {
             layers,
         };
         // Keep only segments newer than the new snapshot's.
-        let is_newer = |id: &u32, s: &mut Arc<HeldSegment>| {
+        let is_newer = |id: &u64, s: &mut Arc<HeldSegment>| {
             s.header().session == session
                 && snapshot
                     .layer_generation(*id)

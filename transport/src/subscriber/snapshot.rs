@@ -71,12 +71,12 @@ impl Snapshot {
     }
 
     /// The bytes of layer `layer_id`, if the snapshot has that layer.
-    pub fn layer(&self, layer_id: u32) -> Option<&[u8]> {
+    pub fn layer(&self, layer_id: u64) -> Option<&[u8]> {
         self.find(layer_id).map(|l| l.segment.bytes())
     }
 
     /// The generation of layer `layer_id` in this snapshot.
-    pub fn layer_generation(&self, layer_id: u32) -> Option<u64> {
+    pub fn layer_generation(&self, layer_id: u64) -> Option<u64> {
         self.find(layer_id).map(|l| l.entry.generation)
     }
 
@@ -85,7 +85,7 @@ impl Snapshot {
         self.layers.iter().map(|l| (l.entry, l.segment.bytes()))
     }
 
-    fn find(&self, layer_id: u32) -> Option<&SnapshotLayer> {
+    fn find(&self, layer_id: u64) -> Option<&SnapshotLayer> {
         self.layers
             .binary_search_by_key(&layer_id, |l| l.entry.layer_id)
             .ok()

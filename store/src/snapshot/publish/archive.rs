@@ -144,36 +144,41 @@ impl SceneGraph {
 
     /// [`SceneGraph::layer_segment`], also returning the symbol map of its string table.
     pub(crate) fn build_layer_segment(&self, layer: LayerId) -> (LayerSegment, StringTable) {
-        let l = &self.layers[&layer];
-        let mut ids: Vec<u64> = l.nodes.iter().map(|n| n.0).collect();
+        let mut ids: Vec<u64> = self.layers[&layer].nodes.iter().map(|n| n.0).collect();
         ids.sort_unstable();
+        self.build_part_segment(layer, 0, ids)
+    }
+
+    /// The segment of part `part` of `layer`: the rows of the nodes `ids` (ascending, all
+    /// of the layer), at the layer's current generation, with the node indexes rooted at
+    /// them.
+    pub(crate) fn build_part_segment(
+        &self,
+        layer: LayerId,
+        part: u32,
+        ids: Vec<u64>,
+    ) -> (LayerSegment, StringTable) {
+        let l = &self.layers[&layer];
         let mut st = StringTable::default();
         let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
+        s.part = part;
         for (row, &id) in ids.iter().enumerate() {
-            self.push_row(&mut s, &mut st, &self.nodes[&NodeId(id)], row as u32, &ids);
+            self.push_row(&mut s, &mut st, &self.nodes[&NodeId(id)], row as u32);
         }
         s.ids = ids;
         s.rebuild_postings();
         s.rebuild_by_parent();
         s.layer_index = self.archived_layer_index(layer, &s);
-        s.node_indexes = self.archived_node_indexes(layer);
+        s.node_indexes = self.archived_node_indexes(layer, &s.ids);
         (s, st)
     }
 
     /// Appends node `n` as row `row` to every per-row column of `s` (not `ids`, the
-    /// postings or the spatial indexes). `ids` are the segment's sorted node ids, for
-    /// edge rows.
-    pub(crate) fn push_row(
-        &self,
-        s: &mut LayerSegment,
-        st: &mut StringTable,
-        n: &Node,
-        row: u32,
-        ids: &[u64],
-    ) {
+    /// postings or the spatial indexes).
+    pub(crate) fn push_row(&self, s: &mut LayerSegment, st: &mut StringTable, n: &Node, row: u32) {
         s.points.extend_from_slice(&n.points);
         push_offset(&mut s.point_offsets, s.points.len());
-        self.push_row_except_points(s, st, n, row, ids);
+        self.push_row_except_points(s, st, n, row);
     }
 
     /// [`SceneGraph::push_row`] for every column but the points and their offsets.
@@ -183,17 +188,15 @@ impl SceneGraph {
         st: &mut StringTable,
         n: &Node,
         row: u32,
-        ids: &[u64],
     ) {
-        let row_of = |id: NodeId| ids.binary_search(&id.0).expect("edge within layer") as u32;
         s.parents.push(n.parent.map_or(NO_PARENT, |p| p.0));
         for &(t, d) in &n.out_edges {
-            s.out_targets.push(row_of(t));
+            s.out_targets.push(t.0);
             s.out_descriptions.push(st.get(self, d, &mut s.strings));
         }
         push_offset(&mut s.out_offsets, s.out_targets.len());
         for &(src, d) in &n.in_edges {
-            s.in_sources.push(row_of(src));
+            s.in_sources.push(src.0);
             s.in_descriptions.push(st.get(self, d, &mut s.strings));
         }
         push_offset(&mut s.in_offsets, s.in_sources.len());
@@ -241,6 +244,7 @@ impl SceneGraph {
                     max_id,
                     parents,
                     children,
+                    parts: vec![0],
                 }
             })
             .collect();
@@ -379,15 +383,19 @@ impl SceneGraph {
         })
     }
 
-    /// The node indexes rooted in `layer` for a snapshot, ascending by root: items are
-    /// positions in each index's sorted id table.
-    pub(crate) fn archived_node_indexes(&self, layer: LayerId) -> Vec<NodeIndexSegment> {
+    /// The node indexes rooted at nodes `ids` (ascending) of `layer` for a snapshot,
+    /// ascending by root: items are positions in each index's sorted id table.
+    pub(crate) fn archived_node_indexes(
+        &self,
+        layer: LayerId,
+        ids: &[u64],
+    ) -> Vec<NodeIndexSegment> {
         let mut roots: Vec<NodeId> = self
             .indexes
             .nodes
             .keys()
             .copied()
-            .filter(|r| self.nodes[r].layer == layer)
+            .filter(|r| self.nodes[r].layer == layer && ids.binary_search(&r.0).is_ok())
             .collect();
         roots.sort_unstable();
         roots

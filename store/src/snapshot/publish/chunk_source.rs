@@ -14,12 +14,13 @@ use rkyv::{Archive, Place, Serialize};
 use std::collections::HashMap;
 
 impl PointChunk {
-    /// Chunk `index` of `layer`'s column `points`, at `generation` (an owned copy; a
-    /// publishing writer archives [`PointChunkSource`] instead).
-    pub fn new(layer: LayerId, index: usize, generation: u64, points: &[Point]) -> Self {
+    /// Chunk `index` of the column `points` of part `part` of `layer`, at `generation`
+    /// (an owned copy; a publishing writer archives [`PointChunkSource`] instead).
+    pub fn new(layer: LayerId, part: u32, index: usize, generation: u64, points: &[Point]) -> Self {
         PointChunk {
             version: FORMAT_VERSION,
             layer: layer.0,
+            part,
             index: index as u32,
             generation,
             points: points.to_vec(),
@@ -32,16 +33,25 @@ impl PointChunk {
 #[derive(Debug, Clone, Copy)]
 pub struct PointChunkSource<'a> {
     layer: u32,
+    part: u32,
     index: u32,
     generation: u64,
     points: &'a [Point],
 }
 
 impl<'a> PointChunkSource<'a> {
-    /// Chunk `index` of `layer`'s column, holding `points`, at `generation`.
-    pub fn new(layer: LayerId, index: usize, generation: u64, points: &'a [Point]) -> Self {
+    /// Chunk `index` of the column of part `part` of `layer`, holding `points`, at
+    /// `generation`.
+    pub fn new(
+        layer: LayerId,
+        part: u32,
+        index: usize,
+        generation: u64,
+        points: &'a [Point],
+    ) -> Self {
         PointChunkSource {
             layer: layer.0,
+            part,
             index: index as u32,
             generation,
             points,
@@ -54,9 +64,10 @@ impl Archive for PointChunkSource<'_> {
     type Resolver = VecResolver;
 
     fn resolve(&self, resolver: VecResolver, out: Place<ArchivedPointChunk>) {
-        munge!(let ArchivedPointChunk { version, layer, index, generation, points } = out);
+        munge!(let ArchivedPointChunk { version, layer, part, index, generation, points } = out);
         FORMAT_VERSION.resolve((), version);
         self.layer.resolve((), layer);
+        self.part.resolve((), part);
         self.index.resolve((), index);
         self.generation.resolve((), generation);
         ArchivedVec::resolve_from_len(self.points.len(), resolver, points);
@@ -74,6 +85,7 @@ impl<S: Fallible + Allocator + Writer + ?Sized> Serialize<S> for PointChunkSourc
 #[derive(Debug, Clone, Copy)]
 pub struct TreeChunkSource<'a> {
     layer: u32,
+    part: u32,
     slot: u32,
     generation: u64,
     items: u32,
@@ -81,11 +93,19 @@ pub struct TreeChunkSource<'a> {
 }
 
 impl<'a> TreeChunkSource<'a> {
-    /// Tree chunk `slot` of `layer`, at `generation`, holding `tree` whose items are
-    /// below `items`.
-    pub fn new(layer: LayerId, slot: usize, generation: u64, items: u32, tree: &'a KdTree) -> Self {
+    /// Tree chunk `slot` of part `part` of `layer`, at `generation`, holding `tree`
+    /// whose items are below `items`.
+    pub fn new(
+        layer: LayerId,
+        part: u32,
+        slot: usize,
+        generation: u64,
+        items: u32,
+        tree: &'a KdTree,
+    ) -> Self {
         TreeChunkSource {
             layer: layer.0,
+            part,
             slot: slot as u32,
             generation,
             items,
@@ -99,9 +119,10 @@ impl Archive for TreeChunkSource<'_> {
     type Resolver = <KdTree as Archive>::Resolver;
 
     fn resolve(&self, resolver: Self::Resolver, out: Place<ArchivedTreeChunk>) {
-        munge!(let ArchivedTreeChunk { version, layer, slot, generation, items, tree } = out);
+        munge!(let ArchivedTreeChunk { version, layer, part, slot, generation, items, tree } = out);
         FORMAT_VERSION.resolve((), version);
         self.layer.resolve((), layer);
+        self.part.resolve((), part);
         self.slot.resolve((), slot);
         self.generation.resolve((), generation);
         self.items.resolve((), items);
@@ -136,20 +157,20 @@ impl crate::SceneGraph {
             .iter()
             .map(|(&id, l)| {
                 let points = l.nodes.iter().map(|n| self.nodes[n].points.len()).sum();
-                let point_chunks = if is_chunked(id, points, chunk_len) {
+                let point_chunks = if is_chunked(points, chunk_len) {
                     chunk_count(points, chunk_len)
                 } else {
                     0
                 };
                 let layer_tree = self.indexes.layers.contains_key(&id)
-                    && has_tree_chunk(id, 0, points, TREE_CHUNK_MIN_POINTS);
+                    && has_tree_chunk(0, points, TREE_CHUNK_MIN_POINTS);
                 let mut roots = node_trees.remove(&id).unwrap_or_default();
                 roots.sort_unstable();
                 let node_tree_chunks = roots
                     .iter()
                     .enumerate()
                     .filter(|(i, (_, points))| {
-                        has_tree_chunk(id, 1 + i, *points, TREE_CHUNK_MIN_POINTS)
+                        has_tree_chunk(1 + i, *points, TREE_CHUNK_MIN_POINTS)
                     })
                     .count();
                 1 + point_chunks + usize::from(layer_tree) + node_tree_chunks
@@ -167,8 +188,8 @@ mod tests {
     fn a_chunk_archived_from_its_column_is_the_owned_chunks_archive() {
         let points: Vec<Point> = (0..1000).map(|i| [i as f32, -(i as f32), 0.5]).collect();
         for range in [0..1, 0..1000, 17..513] {
-            let owned = PointChunk::new(LayerId(7), 3, 42, &points[range.clone()]);
-            let source = PointChunkSource::new(LayerId(7), 3, 42, &points[range]);
+            let owned = PointChunk::new(LayerId(7), 2, 3, 42, &points[range.clone()]);
+            let source = PointChunkSource::new(LayerId(7), 2, 3, 42, &points[range]);
             assert_eq!(source.archived_len(), owned.archived_len());
             assert_eq!(&archive(&source)[..], &archive(&owned)[..]);
         }
@@ -180,10 +201,11 @@ mod tests {
             .map(|i| (i / 3, [i as f32, (i % 7) as f32, 0.5]))
             .collect();
         let tree = crate::index::build_tree(&entries);
-        let source = TreeChunkSource::new(LayerId(7), 0, 42, 1000, &tree);
+        let source = TreeChunkSource::new(LayerId(7), 2, 0, 42, 1000, &tree);
         let owned = TreeChunk {
             version: FORMAT_VERSION,
             layer: 7,
+            part: 2,
             slot: 0,
             generation: 42,
             items: 1000,

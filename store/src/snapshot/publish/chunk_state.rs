@@ -240,10 +240,9 @@ impl ChunkState {
     ) {
         self.tree_publish_form(segment, tree_min_points);
         self.node_trees_publish_form(segment, tree_min_points);
-        let layer = LayerId(segment.layer);
         let total = segment.points.len();
         let changed = std::mem::take(&mut self.changed);
-        if !is_chunked(layer, total, chunk_len) {
+        if !is_chunked(total, chunk_len) {
             self.refs.clear();
             return;
         }
@@ -273,11 +272,10 @@ impl ChunkState {
     /// The base tree's part of [`ChunkState::publish_form`].
     fn tree_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
         let rebuilt = std::mem::take(&mut self.tree_rebuilt);
-        let layer = LayerId(segment.layer);
         let Some(index) = segment
             .layer_index
             .as_mut()
-            .filter(|i| has_tree_chunk(layer, 0, i.base_points as usize, min_points))
+            .filter(|i| has_tree_chunk(0, i.base_points as usize, min_points))
         else {
             self.tree_ref = None;
             return;
@@ -303,11 +301,10 @@ impl ChunkState {
     fn node_trees_publish_form(&mut self, segment: &mut LayerSegment, min_points: usize) {
         let mut rebuilt = std::mem::take(&mut self.node_trees_rebuilt);
         rebuilt.sort_unstable();
-        let layer = LayerId(segment.layer);
         let old_refs = std::mem::take(&mut self.node_refs);
         for (i, index) in segment.node_indexes.iter_mut().enumerate() {
             let points = index.tree.size();
-            if !has_tree_chunk(layer, 1 + i, points, min_points) {
+            if !has_tree_chunk(1 + i, points, min_points) {
                 self.node_refs.push((index.root, None));
                 if withholds_node_tree(points, index.ids.len(), min_points) {
                     // Withheld: readers walk a sub-tree this small (`SceneView::node_index`
@@ -355,16 +352,6 @@ pub struct PublishedLayer<'c> {
     node_trees: &'c [(usize, KdTree)],
 }
 
-/// The chunk segments a published layer sends beside its layer segment
-/// ([`PublishedLayer::chunk_shape`]): equal shapes mean the same segment ids.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ChunkShape {
-    /// Point chunks.
-    pub point_chunks: usize,
-    /// Segment ids of the tree chunks, ascending.
-    pub tree_chunks: Vec<u32>,
-}
-
 impl<'c> PublishedLayer<'c> {
     pub(super) fn new(segment: &'c LayerSegment, state: &'c ChunkState) -> Self {
         let points = if segment.point_chunks.is_empty() {
@@ -388,8 +375,8 @@ impl<'c> PublishedLayer<'c> {
     /// The trees that travel as tree chunks, ascending by slot (the layer index's base
     /// tree first, then node indexes' trees): each one's segment id, generation, and the
     /// chunk ready to archive (the tree is not copied).
-    pub fn tree_chunks(&self) -> impl Iterator<Item = (u32, u64, TreeChunkSource<'c>)> + 'c {
-        let layer = LayerId(self.segment.layer);
+    pub fn tree_chunks(&self) -> impl Iterator<Item = (u64, u64, TreeChunkSource<'c>)> + 'c {
+        let (layer, part) = (LayerId(self.segment.layer), self.segment.part);
         let segment = self.segment;
         let base = self.tree.and_then(|tree| {
             let index = segment.layer_index.as_ref()?;
@@ -404,39 +391,30 @@ impl<'c> PublishedLayer<'c> {
         base.into_iter()
             .chain(nodes)
             .map(move |(slot, r, items, tree)| {
-                let id = tree_chunk_segment_id(layer, slot).expect("a tree chunk's id fits");
+                let id = tree_chunk_segment_id(layer, part, slot).expect("a tree chunk's id fits");
                 (
                     id,
                     r.generation,
-                    TreeChunkSource::new(layer, slot, r.generation, items, tree),
+                    TreeChunkSource::new(layer, part, slot, r.generation, items, tree),
                 )
             })
     }
 
-    /// The chunk segments the layer publishes beside its layer segment.
-    pub fn chunk_shape(&self) -> ChunkShape {
-        ChunkShape {
-            point_chunks: self.segment.point_chunks.len(),
-            tree_chunks: self.tree_chunks().map(|(id, _, _)| id).collect(),
-        }
-    }
-
-    /// How many chunk segments the layer publishes beside its layer segment (the count of
-    /// [`PublishedLayer::chunk_shape`], without collecting it).
+    /// How many chunk segments the part publishes beside its segment.
     pub fn chunk_segments(&self) -> usize {
         self.segment.point_chunks.len() + self.tree_chunks().count()
     }
 
     /// The layer's point chunks: `(segment id, generation)` each, in column order (none
     /// for a layer published in one piece).
-    pub fn chunks(&self) -> impl Iterator<Item = (u32, u64)> + 'c {
-        let layer = LayerId(self.segment.layer);
+    pub fn chunks(&self) -> impl Iterator<Item = (u64, u64)> + 'c {
+        let (layer, part) = (LayerId(self.segment.layer), self.segment.part);
         self.segment
             .point_chunks
             .iter()
             .enumerate()
             .map(move |(i, r)| {
-                let id = chunk_segment_id(layer, i).expect("a chunked layer's ids fit");
+                let id = chunk_segment_id(layer, part, i).expect("a chunked layer's ids fit");
                 (id, r.generation)
             })
     }
@@ -451,6 +429,7 @@ impl<'c> PublishedLayer<'c> {
         let range = chunk_range(index, self.points.len(), chunk_len);
         PointChunkSource::new(
             LayerId(self.segment.layer),
+            self.segment.part,
             index,
             r.generation,
             &self.points[range],

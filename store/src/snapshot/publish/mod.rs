@@ -6,8 +6,10 @@ mod by_parent;
 mod chunk_source;
 mod chunk_state;
 mod layer_index_update;
+mod parts;
 mod segment_cache;
 
 pub use chunk_source::{PointChunkSource, TreeChunkSource};
-pub use chunk_state::{ChunkShape, PublishedLayer};
+pub use chunk_state::PublishedLayer;
+pub use parts::PublishedParts;
 pub use segment_cache::SegmentCache;

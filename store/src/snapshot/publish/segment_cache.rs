@@ -24,8 +24,9 @@
 //! mutations.
 
 use super::archive::StringTable;
-use super::chunk_state::{ChunkState, PublishedLayer};
+use super::chunk_state::ChunkState;
 use super::layer_index_update::{PointChanges, update_layer_index};
+use super::parts::{LayerParts, PartRows, PublishedParts};
 use crate::bytes::{SegmentBytes, archive};
 use crate::graph::Layer;
 use crate::graph::LayerChanges;
@@ -58,16 +59,21 @@ use std::ops::Range;
 /// # Ok(()) }
 /// ```
 pub struct SegmentCache {
-    layers: FxHashMap<LayerId, Box<Cached>>,
-    /// Points per chunk of a chunked layer ([`SegmentCache::published_layer`]).
+    layers: FxHashMap<LayerId, Box<LayerParts>>,
+    /// Points per chunk of a chunked part ([`SegmentCache::published_layer`]).
     point_chunk_len: usize,
     /// Fewest points of a layer index's base tree sent as a tree chunk.
     tree_chunk_min_points: usize,
+    /// How layers are split into parts (`None`: each in one piece).
+    part_rows: Option<PartRows>,
     /// The last manifest, the graph's structure and terms generations it was built at, and
     /// its archived length once asked for ([`SegmentCache::manifest_with_len`]).
     manifest: Option<CachedManifest>,
-    /// Chunk segments (point and tree chunks) of every layer in published form.
-    chunk_segments: usize,
+    /// Segments of every layer in published form beyond one per layer: further parts,
+    /// point and tree chunks.
+    extra_segments: usize,
+    /// Bumped whenever a layer's list of parts changes (the manifest lists them).
+    parts_generation: u64,
 }
 
 impl std::fmt::Debug for SegmentCache {
@@ -83,6 +89,8 @@ impl std::fmt::Debug for SegmentCache {
 struct CachedManifest {
     structure_generation: u64,
     terms_generation: u64,
+    /// [`SegmentCache::parts_generation`] when it was built.
+    parts_generation: u64,
     manifest: Manifest,
     /// The manifest archived, once asked for ([`SegmentCache::manifest_bytes`]): only
     /// fixed-size fields change between structure or terms changes, so they are
@@ -137,9 +145,9 @@ impl ManifestBytes {
     }
 }
 
-/// One layer's cached segment.
-struct Cached {
-    segment: LayerSegment,
+/// One part's cached segment.
+pub(super) struct Cached {
+    pub(super) segment: LayerSegment,
     strings: StringTable,
     /// The layer's incarnation (a removed layer's id may come back).
     incarnation: u64,
@@ -147,8 +155,28 @@ struct Cached {
     strings_at_full_build: usize,
     /// Base entries of the layer index that its patch killed (`index_patch`).
     index_killed: usize,
-    /// The point chunks last published, if the layer is chunked (`chunk_state`).
-    chunks: ChunkState,
+    /// The point chunks last published, if the part is chunked (`chunk_state`).
+    pub(super) chunks: ChunkState,
+}
+
+impl Cached {
+    /// Part `part` of `layer` built afresh from the nodes `ids` (ascending).
+    pub(super) fn build(
+        graph: &SceneGraph,
+        layer: LayerId,
+        part: u32,
+        ids: Vec<u64>,
+    ) -> Box<Cached> {
+        let (segment, strings) = graph.build_part_segment(layer, part, ids);
+        Box::new(Cached {
+            incarnation: graph.layers[&layer].incarnation,
+            strings_at_full_build: segment.strings.len(),
+            segment,
+            strings,
+            index_killed: 0,
+            chunks: ChunkState::fresh(),
+        })
+    }
 }
 
 impl Default for SegmentCache {
@@ -157,19 +185,22 @@ impl Default for SegmentCache {
             layers: FxHashMap::default(),
             point_chunk_len: POINT_CHUNK_LEN,
             tree_chunk_min_points: TREE_CHUNK_MIN_POINTS,
+            part_rows: None,
             manifest: None,
-            chunk_segments: 0,
+            extra_segments: 0,
+            parts_generation: 0,
         }
     }
 }
 
 impl SegmentCache {
-    /// An empty cache that chunks layers of more than [`POINT_CHUNK_LEN`] points.
+    /// An empty cache that keeps each layer in one piece and chunks layers of more than
+    /// [`POINT_CHUNK_LEN`] points.
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// An empty cache that chunks layers of more than `len` points into chunks of `len`
+    /// An empty cache that chunks parts of more than `len` points into chunks of `len`
     /// (rounded up to a power of two, at most [`MAX_POINT_CHUNK_LEN`]): small chunks
     /// exercise chunk boundaries in tests.
     pub fn with_point_chunk_len(len: usize) -> Self {
@@ -189,6 +220,21 @@ impl SegmentCache {
         }
     }
 
+    /// This cache, splitting each layer into parts (see `parts`): the newest part grows
+    /// to `tail` rows before another starts, sealed parts merge up to `max` rows, and a
+    /// part past `max` rows is split ([`PART_ROWS`](crate::snapshot::PART_ROWS) and
+    /// [`MAX_PART_ROWS`](crate::snapshot::MAX_PART_ROWS) for a publishing writer). Small values exercise part boundaries in tests.
+    ///
+    /// # Panics
+    /// If `tail` is 0 or `max` is below `tail`.
+    pub fn with_part_rows(self, tail: usize, max: usize) -> Self {
+        assert!(0 < tail && tail <= max, "parts of {tail} to {max} rows");
+        SegmentCache {
+            part_rows: Some(PartRows { tail, max }),
+            ..self
+        }
+    }
+
     /// The segment of `layer`, equal in content to [`SceneGraph::layer_segment`], built
     /// incrementally from the one this cache built last time (see the module docs):
     /// after a small change to a large layer only the changed rows are rebuilt. The
@@ -196,20 +242,27 @@ impl SegmentCache {
     /// layer's change journal.
     ///
     /// # Panics
-    /// If `layer` does not exist.
+    /// If `layer` does not exist, or this cache splits layers into parts
+    /// ([`SegmentCache::with_part_rows`]): use [`SegmentCache::published_layer`].
     pub fn layer_segment(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &LayerSegment {
-        let cached = self.update(graph, layer);
+        assert!(
+            self.part_rows.is_none(),
+            "a cache that splits layers into parts"
+        );
+        let parts = self.update(graph, layer);
+        let cached = &mut parts.parts[0].cached;
         cached
             .chunks
             .build_stale_node_trees(graph, &mut cached.segment, 0);
         &cached.segment
     }
 
-    /// The layer as a publishing writer sends it: [`SegmentCache::layer_segment`], but a
-    /// layer of more points than a chunk holds ([`POINT_CHUNK_LEN`] by default) has its
-    /// point column split into chunks, and each chunk keeps the generation at
-    /// which its points last changed, so that only changed chunks need sending (see
-    /// `chunk`). Consumes the layer's change journal.
+    /// The layer as a publishing writer sends it: its parts (one unless this cache splits
+    /// layers, [`SegmentCache::with_part_rows`]), each like [`SegmentCache::layer_segment`]
+    /// but with a point column of more points than a chunk holds ([`POINT_CHUNK_LEN`] by
+    /// default) split into chunks, each of which keeps the generation at which its points
+    /// last changed, so that only changed parts and chunks need sending (see `chunk`).
+    /// Consumes the layer's change journal.
     ///
     /// # Panics
     /// If `layer` does not exist.
@@ -217,67 +270,74 @@ impl SegmentCache {
         &mut self,
         graph: &mut SceneGraph,
         layer: LayerId,
-    ) -> PublishedLayer<'_> {
+    ) -> PublishedParts<'_> {
         let (chunk_len, tree_min) = (self.point_chunk_len, self.tree_chunk_min_points);
-        let cached = self.update(graph, layer);
-        cached
-            .chunks
-            .build_stale_node_trees(graph, &mut cached.segment, tree_min);
-        cached
-            .chunks
-            .publish_form(&mut cached.segment, chunk_len, tree_min);
-        let chunks = published_chunks(cached);
-        self.chunk_segments += chunks;
-        let cached = &self.layers[&layer];
-        PublishedLayer::new(&cached.segment, &cached.chunks)
+        let parts = self.update(graph, layer);
+        for part in &mut parts.parts {
+            let cached = &mut part.cached;
+            cached
+                .chunks
+                .build_stale_node_trees(graph, &mut cached.segment, tree_min);
+            cached
+                .chunks
+                .publish_form(&mut cached.segment, chunk_len, tree_min);
+        }
+        let extra = extra_segments(parts);
+        self.extra_segments += extra;
+        PublishedParts::new(&self.layers[&layer])
     }
 
-    /// The chunk segments (point and tree chunks) the layers in published form send
-    /// beside their layer segments, in O(1): with the layer count, the size of a cut.
-    pub fn chunk_segments(&self) -> usize {
-        self.chunk_segments
+    /// The segments the layers in published form send beyond one per layer (further
+    /// parts, point and tree chunks), in O(1): with the layer count, the size of a cut.
+    pub fn extra_segments(&self) -> usize {
+        self.extra_segments
     }
 
     /// The layer as the last [`SegmentCache::published_layer`] left it (`None` if this
     /// cache never built it). A later [`SegmentCache::layer_segment`] puts its points
     /// back inline.
-    pub fn published(&self, layer: LayerId) -> Option<PublishedLayer<'_>> {
-        self.layers
-            .get(&layer)
-            .map(|c| PublishedLayer::new(&c.segment, &c.chunks))
+    pub fn published(&self, layer: LayerId) -> Option<PublishedParts<'_>> {
+        self.layers.get(&layer).map(|p| PublishedParts::new(p))
     }
 
     /// The cached layer brought up to date with the graph, its points inline.
-    fn update(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &mut Cached {
+    fn update(&mut self, graph: &mut SceneGraph, layer: LayerId) -> &mut LayerParts {
         let l = &graph.layers[&layer];
         let (generation, incarnation) = (l.generation, l.incarnation);
         let removed = self.layers.remove(&layer);
-        if let Some(c) = removed.as_deref() {
-            self.chunk_segments -= published_chunks(c);
+        if let Some(p) = removed.as_deref() {
+            self.extra_segments -= extra_segments(p);
         }
-        let mut cached = removed.filter(|c| c.incarnation == incarnation);
-        if let Some(c) = cached.as_mut() {
-            let Cached {
-                segment, chunks, ..
-            } = &mut **c;
-            chunks.restore(segment);
+        let mut kept = removed.filter(|p| p.incarnation == incarnation);
+        let numbers_before = kept.as_ref().map(|p| p.numbers());
+        if let Some(p) = kept.as_mut() {
+            for part in &mut p.parts {
+                let Cached {
+                    segment, chunks, ..
+                } = &mut *part.cached;
+                chunks.restore(segment);
+            }
         }
-        let cached = match cached {
-            Some(c) if c.segment.generation == generation => c,
-            Some(c) => {
+        let parts = match kept {
+            Some(p) if p.generation == generation => p,
+            Some(p) => {
                 let changes = graph.take_layer_changes(layer);
-                patched(graph, layer, *c, changes).unwrap_or_else(|| full(graph, layer))
+                p.patched(graph, layer, changes, self.part_rows)
+                    .unwrap_or_else(|| LayerParts::full(graph, layer, self.part_rows))
             }
             None => {
                 graph.take_layer_changes(layer);
-                full(graph, layer)
+                LayerParts::full(graph, layer, self.part_rows)
             }
         };
-        self.layers.entry(layer).insert_entry(cached).into_mut()
+        if numbers_before.as_ref() != Some(&parts.numbers()) {
+            self.parts_generation += 1;
+        }
+        self.layers.entry(layer).insert_entry(parts).into_mut()
     }
 
     /// The manifest [`SceneGraph::manifest`] builds, kept for next time: while no layer,
-    /// layer edge or graph-level label/key entry was added or removed, only the
+    /// layer edge, part or graph-level label/key entry was added or removed, only the
     /// per-layer generations, node counts and id bounds are brought up to date (the id
     /// bounds from this cache's segments where they are current).
     pub fn manifest(&mut self, graph: &SceneGraph, generation: u64) -> &Manifest {
@@ -285,9 +345,10 @@ impl SegmentCache {
     }
 
     /// [`SegmentCache::manifest`] archived: the bytes a publish copies into its sample.
-    /// They are archived only when the structure or the terms changed; otherwise the
-    /// changed entries' generations, node counts and id bounds and the cut's generation
-    /// are written into the kept bytes (the other fields have fixed archived sizes).
+    /// They are archived only when the structure, the parts or the terms changed;
+    /// otherwise the changed entries' generations, node counts and id bounds and the
+    /// cut's generation are written into the kept bytes (the other fields have fixed
+    /// archived sizes).
     ///
     /// `changed`, if given, lists every layer whose generation changed since the last
     /// call: with the structure and terms unchanged, only their entries are brought up to
@@ -311,9 +372,19 @@ impl SegmentCache {
         generation: u64,
         changed: Option<&[LayerId]>,
     ) -> &mut CachedManifest {
-        let key = (graph.structure_generation, graph.terms_generation);
+        let key = (
+            graph.structure_generation,
+            graph.terms_generation,
+            self.parts_generation,
+        );
         let cached = match self.manifest.take() {
-            Some(mut c) if (c.structure_generation, c.terms_generation) == key => {
+            Some(mut c)
+                if (
+                    c.structure_generation,
+                    c.terms_generation,
+                    c.parts_generation,
+                ) == key =>
+            {
                 match changed {
                     Some(changed) => {
                         for id in changed {
@@ -337,18 +408,29 @@ impl SegmentCache {
                 c
             }
             _ => {
-                let chunk_segments = &mut self.chunk_segments;
-                self.layers.retain(|id, c| {
+                let extra = &mut self.extra_segments;
+                self.layers.retain(|id, p| {
                     let kept = graph.layers.contains_key(id);
                     if !kept {
-                        *chunk_segments -= published_chunks(c);
+                        *extra -= extra_segments(p);
                     }
                     kept
                 });
+                let mut manifest = graph.manifest(generation);
+                for entry in &mut manifest.layers {
+                    if let Some(p) = self.layers.get(&LayerId(entry.id)) {
+                        entry.parts = p.numbers();
+                        if let Some(bounds) = p.current_id_bounds(&graph.layers[&LayerId(entry.id)])
+                        {
+                            (entry.min_id, entry.max_id) = bounds;
+                        }
+                    }
+                }
                 CachedManifest {
                     structure_generation: key.0,
                     terms_generation: key.1,
-                    manifest: graph.manifest(generation),
+                    parts_generation: key.2,
+                    manifest,
                     archived: None,
                 }
             }
@@ -360,7 +442,7 @@ impl SegmentCache {
 impl CachedManifest {
     /// Brings entry `i` up to date with its live layer `l`, in the manifest and in its
     /// archived bytes if kept.
-    fn refresh(&mut self, i: usize, cache: &FxHashMap<LayerId, Box<Cached>>, l: &Layer) {
+    fn refresh(&mut self, i: usize, cache: &FxHashMap<LayerId, Box<LayerParts>>, l: &Layer) {
         let entry = &mut self.manifest.layers[i];
         refresh_entry(entry, cache, l);
         if let Some(archived) = self.archived.as_mut() {
@@ -370,43 +452,38 @@ impl CachedManifest {
 }
 
 /// Brings a manifest entry up to date with its live layer `l`: generation, node count and
-/// id bounds (from the cached segment when it is current).
-fn refresh_entry(entry: &mut ManifestLayer, cache: &FxHashMap<LayerId, Box<Cached>>, l: &Layer) {
+/// id bounds (from the cached parts when they are current).
+fn refresh_entry(
+    entry: &mut ManifestLayer,
+    cache: &FxHashMap<LayerId, Box<LayerParts>>,
+    l: &Layer,
+) {
     entry.generation = l.generation;
     entry.node_count = l.nodes.len() as u64;
-    (entry.min_id, entry.max_id) = match cache.get(&LayerId(entry.id)) {
-        Some(c) if c.segment.generation == l.generation && c.incarnation == l.incarnation => (
-            c.segment.ids.first().copied().unwrap_or(u64::MAX),
-            c.segment.ids.last().copied().unwrap_or(0),
-        ),
-        _ => l.id_bounds(),
-    };
+    (entry.min_id, entry.max_id) = cache
+        .get(&LayerId(entry.id))
+        .and_then(|p| p.current_id_bounds(l))
+        .unwrap_or_else(|| l.id_bounds());
 }
 
-/// The chunk segments a cached layer publishes (none unless it is in published form).
-fn published_chunks(c: &Cached) -> usize {
-    PublishedLayer::new(&c.segment, &c.chunks).chunk_segments()
-}
-
-fn full(graph: &SceneGraph, layer: LayerId) -> Box<Cached> {
-    let (segment, strings) = graph.build_layer_segment(layer);
-    Box::new(Cached {
-        incarnation: graph.layers[&layer].incarnation,
-        strings_at_full_build: segment.strings.len(),
-        segment,
-        strings,
-        index_killed: 0,
-        chunks: ChunkState::fresh(),
-    })
+/// The segments a cached layer publishes beyond one (none unless it is in published form
+/// or split into parts).
+fn extra_segments(p: &LayerParts) -> usize {
+    PublishedParts::new(p).segment_count() - 1
 }
 
 /// The cached segment brought up to date row by row, or `None` when rows moved (a
 /// full build is needed).
-fn patched(
+///
+/// `expected_rows`, if given, is the row count the segment must have after the patch
+/// (the layer's node count for a layer in one piece): a journal that disagrees means a
+/// full build.
+pub(super) fn patched(
     graph: &SceneGraph,
     layer: LayerId,
     cache: Cached,
     changes: LayerChanges,
+    expected_rows: Option<usize>,
 ) -> Option<Box<Cached>> {
     let Cached {
         segment: mut old,
@@ -455,7 +532,7 @@ fn patched(
             Err(_) => return None,
         }
     }
-    if old_rows + appended.len() != l.nodes.len() {
+    if expected_rows.is_some_and(|rows| old_rows + appended.len() != rows) {
         return None;
     }
     let mut ids = Vec::with_capacity(l.nodes.len());
@@ -473,13 +550,7 @@ fn patched(
     let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &points_kept, &ids) {
         Some(terms_changed) => {
             for (row, &id) in ids.iter().enumerate().skip(old_rows) {
-                graph.push_row(
-                    &mut old,
-                    &mut table,
-                    &graph.nodes[&NodeId(id)],
-                    row as u32,
-                    &ids,
-                );
+                graph.push_row(&mut old, &mut table, &graph.nodes[&NodeId(id)], row as u32);
             }
             old.ids = ids;
             old.generation = l.generation;
@@ -490,6 +561,7 @@ fn patched(
         }
         None => {
             let mut s = LayerSegment::empty(layer, l.generation, &l.name, ids.len());
+            s.part = old.part;
             s.strings = std::mem::take(&mut old.strings);
             let mut aabb_cursor = 0;
             let mut clean_from = 0;
@@ -501,7 +573,7 @@ fn patched(
                     &mut aabb_cursor,
                 );
                 let node = &graph.nodes[&NodeId(ids[row])];
-                graph.push_row(&mut s, &mut table, node, row as u32, &ids);
+                graph.push_row(&mut s, &mut table, node, row as u32);
                 clean_from = row + 1;
             }
             copy_rows(&old, &mut s, clean_from..old_rows, &mut aabb_cursor);
@@ -569,7 +641,7 @@ fn rows_in_place(
     for &row in dirty_rows {
         let node = &graph.nodes[&NodeId(ids[row])];
         // The points go from the node to the column directly (a mesh node may hold many).
-        graph.push_row_except_points(&mut fresh, table, node, row as u32, ids);
+        graph.push_row_except_points(&mut fresh, table, node, row as u32);
         let end = fresh.point_offsets.last().copied().unwrap_or(0) + node.points.len() as u32;
         fresh.point_offsets.push(end);
     }

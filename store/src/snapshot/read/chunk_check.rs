@@ -15,25 +15,28 @@ pub(crate) fn check_tree_chunk(chunk: &ArchivedTreeChunk) -> Result<(), String> 
     check_tree(&chunk.tree, chunk.items.to_native() as usize)
 }
 
-/// Checks a tree chunk against the index that names it as tree `slot` of `layer`: same
-/// layer and slot, the generation and point count of `r`, items within `items` (the
-/// layer index's base rows, the node index's id table).
+/// Checks a tree chunk against the index that names it as tree `slot` of part `part` of
+/// `layer`: same layer, part and slot, the generation and point count of `r`, items
+/// within `items` (the layer index's base rows, the node index's id table).
 pub(crate) fn check_tree_chunk_matches(
     chunk: &ArchivedTreeChunk,
     layer: u32,
+    part: u32,
     slot: u32,
     items: u32,
     r: &ArchivedTreeChunkRef,
 ) -> Result<(), String> {
     if chunk.layer != layer
+        || chunk.part != part
         || chunk.slot != slot
         || chunk.generation != r.generation
         || chunk.tree.size() != r.points.to_native() as usize
         || chunk.items.to_native() > items
     {
         return Err(format!(
-            "tree chunk segment (layer {}, slot {}, generation {}, {} points, items below {}) where layer {layer} names tree {slot} at generation {} with {} points, items below {items}",
+            "tree chunk segment (layer {}, part {}, slot {}, generation {}, {} points, items below {}) where layer {layer} part {part} names tree {slot} at generation {} with {} points, items below {items}",
             chunk.layer,
+            chunk.part,
             chunk.slot,
             chunk.generation,
             chunk.tree.size(),
@@ -79,21 +82,24 @@ pub(crate) fn check_chunk_refs(
     Ok(total)
 }
 
-/// Checks a chunk segment against the entry of its layer segment that names it.
+/// Checks a chunk segment against the entry of its part segment that names it.
 pub(crate) fn check_chunk_matches(
     chunk: &ArchivedPointChunk,
     layer: u32,
+    part: u32,
     index: usize,
     r: &ArchivedPointChunkRef,
 ) -> Result<(), String> {
     if chunk.layer != layer
+        || chunk.part != part
         || chunk.index != index as u32
         || chunk.generation != r.generation
         || chunk.points.len() != r.len.to_native() as usize
     {
         return Err(format!(
-            "point chunk segment (layer {}, chunk {}, generation {}, {} points) where layer {layer} names chunk {index} at generation {} with {} points",
+            "point chunk segment (layer {}, part {}, chunk {}, generation {}, {} points) where layer {layer} part {part} names chunk {index} at generation {} with {} points",
             chunk.layer,
+            chunk.part,
             chunk.index,
             chunk.generation,
             chunk.points.len(),

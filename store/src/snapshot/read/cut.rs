@@ -1,14 +1,14 @@
 //! [`ArchivedScene`]: a consistent cut of validated archived segments, joined and checked
-//! (the manifest's structure, each layer segment, point chunk and tree chunk against the
-//! entry that names it). Its [`crate::SceneView`] is in `scene_view.rs`.
+//! (the manifest's structure, each layer's parts, point chunks and tree chunks against the
+//! entry that names them). Its [`crate::SceneView`] is in `scene_view.rs`.
 
 use super::chunk_check::{check_chunk_matches, check_tree_chunk_matches, chunk_points};
 use super::rejoin::KnownParts;
 use super::validate::{LayerPositions, check_dag};
-use crate::index::ArchivedKdTree;
+use crate::snapshot::chunking::PART_ITEM_ROW_BITS;
 use crate::snapshot::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk,
-    ArchivedTreeChunkRef, u32s,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer, ArchivedPointChunk,
+    ArchivedTreeChunk, ArchivedTreeChunkRef, u32s, u64s,
 };
 use crate::{LayerId, Point};
 use rkyv::collections::swiss_table::ArchivedHashMap;
@@ -22,16 +22,23 @@ pub(super) type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend:
 /// `.ygg` file or from shared memory.
 pub struct ArchivedScene<'a> {
     pub(super) manifest: &'a ArchivedManifest,
-    /// Layer segments in manifest order (ascending layer id).
-    pub(super) layers: Vec<&'a ArchivedLayerSegment>,
-    /// The points of every chunk of every chunked layer, in layer and column order.
-    pub(super) chunks: Vec<&'a [Point]>,
-    /// Per layer position (and one past the last), where its chunks start in `chunks`;
-    /// empty when no layer is chunked.
-    pub(super) chunk_start: Vec<u32>,
-    /// The trees that travel as tree chunks, by (layer id, slot), ascending: slot 0 is
-    /// a layer index's base tree, slot `1 + i` the tree of the layer's node index `i`.
-    pub(super) index_trees: Vec<((u32, u32), &'a ArchivedKdTree)>,
+    /// Part segments in manifest order: each layer's parts in the order its entry lists
+    /// them (ascending ids). A layer in one piece has one part.
+    pub(super) parts: Vec<&'a ArchivedLayerSegment>,
+    /// Per manifest position (and one past the last), where its parts start in `parts`.
+    pub(super) part_start: Vec<u32>,
+    /// The point chunks of every chunked part, by (layer id, part number), then in
+    /// column order.
+    pub(super) chunks: Vec<&'a ArchivedPointChunk>,
+    /// The points of each of `chunks`.
+    pub(super) chunk_points: Vec<&'a [Point]>,
+    /// Per position in `parts`, the range of its chunks in `chunks`; empty when no part
+    /// is chunked.
+    pub(super) chunk_ranges: Vec<[u32; 2]>,
+    /// The trees that travel as tree chunks, by (layer id, part number, slot),
+    /// ascending: slot 0 is a part's layer index base tree, slot `1 + i` the tree of its
+    /// node index `i`.
+    pub(super) index_trees: Vec<&'a ArchivedTreeChunk>,
 }
 
 /// Checks what a manifest's bytecheck does not and depends on nothing but its structure:
@@ -50,6 +57,15 @@ fn check_structure(manifest: &ArchivedManifest) -> Result<(), String> {
         if !known(&m.parents) || !known(&m.children) {
             return Err(format!("layer {} has a DAG edge to an unknown layer", m.id));
         }
+        let mut parts = u32s(&m.parts).to_vec();
+        parts.sort_unstable();
+        if parts.is_empty() || parts.windows(2).any(|w| w[0] == w[1]) {
+            return Err(format!(
+                "layer {} lists no part or a part twice ({:?})",
+                m.id,
+                u32s(&m.parts)
+            ));
+        }
     }
     check_dag(manifest, &positions)?;
     for ls in manifest
@@ -64,151 +80,326 @@ fn check_structure(manifest: &ArchivedManifest) -> Result<(), String> {
     Ok(())
 }
 
-/// A node of an [`ArchivedScene`]: its layer's position in the manifest and its row.
+/// A node of an [`ArchivedScene`]: its part's position in the cut and its row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ArchivedNodeRef {
-    pub(super) layer: u32,
+    pub(super) part: u32,
     pub(super) row: u32,
 }
 
+/// The position in `given` (sorted by `key`) of the element with key `k`.
+fn find<T>(given: &[T], k: (u32, u32), key: impl Fn(&T) -> (u32, u32)) -> Option<usize> {
+    given.binary_search_by_key(&k, key).ok()
+}
+
+/// Why `given` (named `what`) does not ascend strictly by `key`, if it does not.
+fn unordered<T, K: Ord + std::fmt::Debug>(
+    what: &str,
+    given: &[T],
+    key: impl Fn(&T) -> K,
+) -> Option<String> {
+    let at = given.windows(2).position(|w| key(&w[0]) >= key(&w[1]))?;
+    Some(format!(
+        "{what} given out of order: {:?} at {} after {:?} (ascending by layer, part, place)",
+        key(&given[at + 1]),
+        at + 1,
+        key(&given[at])
+    ))
+}
+
+/// The range of the elements of `given` (sorted by `key`) with key `k`.
+fn run<T>(given: &[T], k: (u32, u32), key: impl Fn(&T) -> (u32, u32)) -> [u32; 2] {
+    let start = given.partition_point(|t| key(t) < k);
+    let end = start + given[start..].partition_point(|t| key(t) == k);
+    [start as u32, end as u32]
+}
+
 impl<'a> ArchivedScene<'a> {
-    /// Joins a validated manifest with its validated layer segments, the validated point
-    /// chunks of its chunked layers (in layer order, then column order) and the validated
-    /// tree chunks of its layer indexes (in layer order), checking that they form the
-    /// cut the manifest names (same layers, same generations, same counts, each chunk the
-    /// one its layer names).
+    /// Joins a validated manifest with its validated part segments (ascending by
+    /// (layer id, part number), as segment ids sort them), the validated point chunks of
+    /// its chunked parts (ascending by layer id, part number and place) and the
+    /// validated tree chunks (ascending by layer id, part number and slot), checking that
+    /// they form the cut the manifest names (same layers and parts, generations no newer
+    /// than the cut's, the same node counts, parts disjoint and ascending by id, each
+    /// chunk the one its part names).
     ///
     /// # Errors
     /// A description of the first mismatch.
     pub fn new(
         manifest: &'a ArchivedManifest,
-        layers: Vec<&'a ArchivedLayerSegment>,
+        parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Result<Self, String> {
-        Self::rejoin(manifest, layers, chunks, trees, KnownParts::NONE)
+        Self::rejoin(manifest, parts, chunks, trees, KnownParts::NONE)
     }
 
     /// [`ArchivedScene::new`] for a reader's next cut: checks what `known` does not say
     /// an earlier join of the same reader accepted (the manifest's structure; per layer,
-    /// its entry against its segment and its chunks), so that a cut in which one layer
-    /// changed costs O(layers) reads of the manifest, not of every segment.
+    /// its entry against its parts and their chunks), so that a cut in which one layer
+    /// changed costs O(segments) reads, not a check of every segment.
     ///
     /// # Errors
     /// A description of the first mismatch.
     pub fn rejoin(
         manifest: &'a ArchivedManifest,
-        layers: Vec<&'a ArchivedLayerSegment>,
+        parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
         known: KnownParts<'_>,
     ) -> Result<Self, String> {
-        if manifest.layers.len() != layers.len() {
-            return Err(format!(
-                "manifest lists {} layers, {} segments given",
-                manifest.layers.len(),
-                layers.len()
-            ));
-        }
         if !known.structure {
             check_structure(manifest)?;
         }
-        for (i, (m, l)) in manifest.layers.iter().zip(&layers).enumerate() {
-            if !known.layer(i)
-                && (m.id != l.layer
-                    || m.generation != l.generation
-                    || m.node_count.to_native() != l.ids.len() as u64)
-            {
-                return Err(format!(
-                    "manifest entry {i} (layer {}, generation {}) does not match segment (layer {}, generation {})",
-                    m.id, m.generation, l.layer, l.generation
-                ));
-            }
-        }
-        // A known layer named no chunk: a chunk given for it is refused below, as the
-        // chunk of another layer or as one that no layer names.
-        let mut next = chunks.iter();
-        for (i, l) in layers.iter().enumerate().filter(|(i, _)| !known.layer(*i)) {
-            for (index, r) in l.point_chunks.iter().enumerate() {
-                let chunk = next.next().ok_or_else(|| {
-                    format!("layer {} names point chunk {index}, not given", l.layer)
-                })?;
-                check_chunk_matches(chunk, manifest.layers[i].id.to_native(), index, r)?;
-            }
-        }
-        if next.next().is_some() {
+        let listed: usize = manifest.layers.iter().map(|m| m.parts.len()).sum();
+        if listed != parts.len() {
             return Err(format!(
-                "{} point chunks given that no layer names",
-                next.len() + 1
+                "manifest lists {listed} parts, {} segments given",
+                parts.len()
             ));
         }
-        let mut next = trees.iter();
-        for (i, l) in layers.iter().enumerate().filter(|(i, _)| !known.layer(*i)) {
-            let layer = manifest.layers[i].id.to_native();
-            let mut expect = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
-                let tree = next
-                    .next()
-                    .ok_or_else(|| format!("layer {layer} names tree chunk {slot}, not given"))?;
-                check_tree_chunk_matches(tree, layer, slot, items, r)
-            };
-            if let Some(index) = l.layer_index.as_ref()
-                && let Some(r) = index.tree_chunk.as_ref()
-            {
-                expect(0, index.base_rows.to_native(), r)?;
+        let (scene, problem) = Self::assemble(manifest, &parts, chunks, trees);
+        if let Some(problem) = problem {
+            return Err(problem);
+        }
+        let (mut point_chunks, mut tree_chunks) = (0, 0);
+        for (i, m) in manifest.layers.iter().enumerate() {
+            let range = scene.part_start[i] as usize..scene.part_start[i + 1] as usize;
+            for &p in &scene.parts[range.clone()] {
+                point_chunks += p.point_chunks.len();
+                tree_chunks += usize::from(
+                    p.layer_index
+                        .as_ref()
+                        .is_some_and(|x| x.tree_chunk.is_some()),
+                ) + p
+                    .node_indexes
+                    .iter()
+                    .filter(|x| x.tree_chunk.is_some())
+                    .count();
             }
-            for (i, index) in l.node_indexes.iter().enumerate() {
-                if let Some(r) = index.tree_chunk.as_ref() {
-                    // `check_layer` bounded the node indexes by the layer's rows.
-                    expect(1 + i as u32, index.ids.len() as u32, r)?;
-                }
+            if !known.layer(i) {
+                scene.check_layer_parts(m, range)?;
             }
         }
-        if next.next().is_some() {
+        if point_chunks != scene.chunks.len() {
             return Err(format!(
-                "{} tree chunks given that no layer names",
-                next.len() + 1
+                "{} point chunks given that no part names (the parts name {point_chunks}, {} given){}",
+                scene.chunks.len().saturating_sub(point_chunks),
+                scene.chunks.len(),
+                scene.stray_point_chunk().unwrap_or_default()
             ));
         }
-        Ok(Self::new_prechecked(manifest, layers, chunks, trees))
+        if tree_chunks != scene.index_trees.len() {
+            return Err(format!(
+                "{} tree chunks given that no part names (the parts name {tree_chunks}, {} given)",
+                scene.index_trees.len().saturating_sub(tree_chunks),
+                scene.index_trees.len()
+            ));
+        }
+        Ok(scene)
     }
 
-    /// Joins a manifest with its layer segments that [`ArchivedScene::new`] already
-    /// accepted, without checking them again (a reader builds a view per query on a
-    /// snapshot it checked once). Given a cut `new` would refuse, queries may panic or
-    /// answer wrongly, but stay memory-safe.
+    /// Checks a layer's parts (at `range` of the cut's parts) against its manifest entry
+    /// `m`, and their chunks against them.
+    fn check_layer_parts(
+        &self,
+        m: &ArchivedManifestLayer,
+        range: std::ops::Range<usize>,
+    ) -> Result<(), String> {
+        let layer = m.id.to_native();
+        let mut rows = 0u64;
+        let mut last_id: Option<u64> = None;
+        let several = range.len() > 1;
+        if several && range.len() >= 1 << (32 - PART_ITEM_ROW_BITS) {
+            return Err(format!("layer {layer} has {} parts", range.len()));
+        }
+        for (k, &p) in self.parts[range.clone()].iter().enumerate() {
+            let number = m.parts[k].to_native();
+            if p.layer != layer || p.part != number || p.generation > m.generation {
+                return Err(format!(
+                    "manifest entry of layer {layer} (generation {}) names part {number}, segment is layer {} part {} generation {}",
+                    m.generation, p.layer, p.part, p.generation
+                ));
+            }
+            let ids = u64s(&p.ids);
+            if several && ids.is_empty() {
+                return Err(format!(
+                    "part {number} of layer {layer} (of several) is empty"
+                ));
+            }
+            if several && ids.len() >= 1 << PART_ITEM_ROW_BITS {
+                return Err(format!(
+                    "part {number} of layer {layer} has {} rows, a layer in parts at most {} per part",
+                    ids.len(),
+                    (1u64 << PART_ITEM_ROW_BITS) - 1
+                ));
+            }
+            if let (Some(last), Some(&first)) = (last_id, ids.first())
+                && last >= first
+            {
+                return Err(format!(
+                    "part {number} of layer {layer} starts at id {first}, not above the part before it"
+                ));
+            }
+            if let Some(&l) = ids.last() {
+                last_id = Some(l);
+            }
+            rows += ids.len() as u64;
+            self.check_part_chunks(p, range.start + k)?;
+        }
+        if rows != m.node_count.to_native() {
+            return Err(format!(
+                "manifest entry of layer {layer} counts {} nodes, its parts hold {rows}",
+                m.node_count
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the point and tree chunks of part `p` (at `position` in the cut) against
+    /// the references it holds.
+    fn check_part_chunks(&self, p: &ArchivedLayerSegment, position: usize) -> Result<(), String> {
+        let (layer, part) = (p.layer.to_native(), p.part.to_native());
+        let [a, b] = self.chunk_ranges.get(position).copied().unwrap_or([0, 0]);
+        if (b - a) as usize != p.point_chunks.len() {
+            return Err(format!(
+                "part {part} of layer {layer} names {} point chunks, {} given",
+                p.point_chunks.len(),
+                b - a
+            ));
+        }
+        for (index, r) in p.point_chunks.iter().enumerate() {
+            check_chunk_matches(self.chunks[a as usize + index], layer, part, index, r)?;
+        }
+        let check_tree = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
+            let tree = self.tree_chunk_segment(layer, part, slot).ok_or_else(|| {
+                format!("part {part} of layer {layer} names tree chunk {slot}, not given")
+            })?;
+            check_tree_chunk_matches(tree, layer, part, slot, items, r)
+        };
+        if let Some(index) = p.layer_index.as_ref()
+            && let Some(r) = index.tree_chunk.as_ref()
+        {
+            check_tree(0, index.base_rows.to_native(), r)?;
+        }
+        for (i, index) in p.node_indexes.iter().enumerate() {
+            if let Some(r) = index.tree_chunk.as_ref() {
+                // `check_layer` bounded the node indexes by the part's rows.
+                check_tree(1 + i as u32, index.ids.len() as u32, r)?;
+            }
+        }
+        Ok(())
+    }
+    /// Joins a manifest with its segments that [`ArchivedScene::new`] already accepted,
+    /// without checking them again (a reader builds a view per query on a snapshot it
+    /// checked once). Given a cut `new` would refuse, queries may panic or answer wrongly,
+    /// but stay memory-safe.
     pub fn new_prechecked(
         manifest: &'a ArchivedManifest,
-        layers: Vec<&'a ArchivedLayerSegment>,
+        parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Self {
-        // The join checked that the chunks come in layer order, each layer's own: where a
-        // layer's chunks start follows from the chunks' layer ids, without reading every
-        // layer segment.
-        let mut chunk_start = Vec::new();
-        if !chunks.is_empty() {
-            chunk_start.reserve(layers.len() + 1);
-            let mut at = 0;
-            for m in manifest.layers.iter() {
-                chunk_start.push(at as u32);
-                while chunks.get(at).is_some_and(|c| c.layer == m.id) {
-                    at += 1;
+        Self::assemble(manifest, &parts, chunks, trees).0
+    }
+
+    /// The cut's parts put in manifest order (found by (layer, part number) in `given`,
+    /// which ascends by it), each part's chunk range, the trees; and what a join must
+    /// refuse, if anything: a listed part not given, a list not strictly ascending by its
+    /// key.
+    fn assemble(
+        manifest: &'a ArchivedManifest,
+        given: &[&'a ArchivedLayerSegment],
+        chunks: Vec<&'a ArchivedPointChunk>,
+        trees: Vec<&'a ArchivedTreeChunk>,
+    ) -> (Self, Option<String>) {
+        let part_key = |p: &&ArchivedLayerSegment| (p.layer.to_native(), p.part.to_native());
+        let chunk_key = |c: &&ArchivedPointChunk| {
+            (c.layer.to_native(), c.part.to_native(), c.index.to_native())
+        };
+        let tree_key =
+            |t: &&ArchivedTreeChunk| (t.layer.to_native(), t.part.to_native(), t.slot.to_native());
+        let mut problem = unordered("part segments", given, part_key)
+            .or_else(|| unordered("point chunks", &chunks, chunk_key))
+            .or_else(|| unordered("tree chunks", &trees, tree_key));
+        let mut parts = Vec::with_capacity(given.len());
+        let mut part_start = Vec::with_capacity(manifest.layers.len() + 1);
+        for m in manifest.layers.iter() {
+            part_start.push(parts.len() as u32);
+            let layer = m.id.to_native();
+            for number in u32s(&m.parts) {
+                match find(given, (layer, *number), part_key) {
+                    Some(at) => parts.push(given[at]),
+                    None => {
+                        problem.get_or_insert_with(|| {
+                            format!("layer {layer} lists part {number}, not given")
+                        });
+                    }
                 }
             }
-            chunk_start.push(at as u32);
         }
-        // The join checked each tree chunk's layer and slot against the index naming it.
-        let index_trees = trees
-            .into_iter()
-            .map(|t| ((t.layer.to_native(), t.slot.to_native()), &t.tree))
-            .collect();
-        ArchivedScene {
+        part_start.push(parts.len() as u32);
+        let chunk_ranges = if chunks.is_empty() {
+            Vec::new()
+        } else {
+            parts
+                .iter()
+                .map(|p| {
+                    run(&chunks, part_key(p), |c| {
+                        (c.layer.to_native(), c.part.to_native())
+                    })
+                })
+                .collect()
+        };
+        let scene = ArchivedScene {
             manifest,
-            layers,
-            chunks: chunks.into_iter().map(chunk_points).collect(),
-            chunk_start,
-            index_trees,
-        }
+            parts,
+            part_start,
+            chunk_points: chunks.iter().map(|c| chunk_points(c)).collect(),
+            chunks,
+            chunk_ranges,
+            index_trees: trees,
+        };
+        (scene, problem)
+    }
+
+    /// A description of a given point chunk that no part of the cut names, if any.
+    fn stray_point_chunk(&self) -> Option<String> {
+        let named = |c: &ArchivedPointChunk| {
+            self.parts.iter().any(|p| {
+                p.layer == c.layer
+                    && p.part == c.part
+                    && (c.index.to_native() as usize) < p.point_chunks.len()
+            })
+        };
+        let c = self.chunks.iter().find(|c| !named(c))?;
+        Some(format!(
+            ": chunk {} of layer {} part {}",
+            c.index, c.layer, c.part
+        ))
+    }
+
+    /// Tree chunk `slot` of part `part` of layer `layer`, if given.
+    pub(super) fn tree_chunk_segment(
+        &self,
+        layer: u32,
+        part: u32,
+        slot: u32,
+    ) -> Option<&'a ArchivedTreeChunk> {
+        let at = self
+            .index_trees
+            .binary_search_by_key(&(layer, part, slot), |t| {
+                (t.layer.to_native(), t.part.to_native(), t.slot.to_native())
+            })
+            .ok()?;
+        Some(self.index_trees[at])
+    }
+
+    /// The manifest position of the layer of the part at `part`.
+    pub(super) fn layer_position(&self, part: u32) -> usize {
+        self.part_start
+            .partition_point(|&s| s <= part)
+            .saturating_sub(1)
     }
 
     /// The manifest's generation.

@@ -1,10 +1,12 @@
 //! The [`SceneView`] of an [`ArchivedScene`]: every method reads the validated columns in
-//! place (ids by binary search, children as runs of `by_parent`, labels and keys through
-//! the archived inverted indexes, spatial indexes as [`ArchivedIndex`]).
+//! place (ids by binary search in the part that may hold them, children as runs of
+//! `by_parent` in each part, labels and keys through each part's archived inverted
+//! indexes, spatial indexes as [`ArchivedIndex`], merged over a layer's parts by
+//! [`PartedIndex`]).
 
 use super::cut::{ArchivedNodeRef, ArchivedScene, ArchivedTermIndex};
 use crate::feature::{FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
-use crate::index::{ArchivedIndex, ArchivedKdTree, RowPatch, SpatialIndex};
+use crate::index::{ArchivedIndex, ArchivedKdTree, PartedIndex, RowPatch, SpatialIndex};
 use crate::points::PointColumn;
 use crate::snapshot::schema::{ArchivedLayerSegment, NO_PARENT, u32s, u64s};
 use crate::view::{EdgeRef, SceneView};
@@ -71,8 +73,8 @@ fn rows_under(seg: &ArchivedLayerSegment, parent: u64) -> &[u32] {
 }
 
 impl<'a> ArchivedScene<'a> {
-    /// The segment of `node`'s layer and the position of the node index rooted at
-    /// `node` in it, if there is one (its tree may be withheld).
+    /// The part holding `node` and the position of the node index rooted at `node` in
+    /// it, if there is one (its tree may be withheld).
     fn node_index_position(&self, node: NodeId) -> Option<(&'a ArchivedLayerSegment, usize)> {
         let seg = self.seg(self.node(node)?);
         let at = seg
@@ -82,41 +84,45 @@ impl<'a> ArchivedScene<'a> {
         Some((seg, at))
     }
 
-    /// Tree `slot` of layer `layer` (id), which travels as a tree chunk.
-    fn tree_chunk(&self, layer: u32, slot: u32) -> Option<&'a ArchivedKdTree> {
-        let at = self
-            .index_trees
-            .binary_search_by_key(&(layer, slot), |(key, _)| *key)
-            .ok()?;
-        Some(self.index_trees[at].1)
+    /// Tree `slot` of part `part` of layer `layer` (id), which travels as a tree chunk.
+    fn tree_chunk(&self, layer: u32, part: u32, slot: u32) -> Option<&'a ArchivedKdTree> {
+        self.tree_chunk_segment(layer, part, slot).map(|t| &t.tree)
     }
 
-    /// The point column of the layer at manifest position `layer`.
-    fn point_column(&self, layer: u32) -> PointColumn<'_> {
-        let l = layer as usize;
-        match self.chunk_start.get(l..=l + 1) {
+    /// The point column of the part at `part`.
+    fn point_column(&self, part: u32) -> PointColumn<'_> {
+        let p = part as usize;
+        match self.chunk_ranges.get(p) {
             Some(&[a, b]) if a < b => PointColumn::Chunked {
-                chunks: self.chunks.get(a as usize..b as usize).unwrap_or(&[]),
+                chunks: self.chunk_points.get(a as usize..b as usize).unwrap_or(&[]),
                 // At least 1 so that a position's chunk is defined even in a cut no
                 // check accepted.
-                chunk_len: (self.layers[l].point_chunk_len.to_native() as usize).max(1),
+                chunk_len: (self.parts[p].point_chunk_len.to_native() as usize).max(1),
             },
-            _ => PointColumn::Inline(bytemuck::cast_slice(self.layers[l].points.as_slice())),
+            _ => PointColumn::Inline(bytemuck::cast_slice(self.parts[p].points.as_slice())),
         }
     }
 
-    /// The segment of a layer.
-    fn segment(&self, layer: LayerId) -> Option<(u32, &'a ArchivedLayerSegment)> {
+    /// The manifest position of a layer and the range of its parts in `parts`.
+    fn segment(&self, layer: LayerId) -> Option<(usize, std::ops::Range<usize>)> {
         let i = self
             .manifest
             .layers
             .binary_search_by_key(&layer.0, |m| m.id.to_native())
             .ok()?;
-        Some((i as u32, self.layers[i]))
+        Some((i, self.part_range(i)))
+    }
+
+    /// The range in `parts` of the parts of the layer at manifest position `i`.
+    fn part_range(&self, i: usize) -> std::ops::Range<usize> {
+        match self.part_start.get(i..=i + 1) {
+            Some(&[a, b]) => a as usize..b as usize,
+            _ => 0..0,
+        }
     }
 
     fn seg(&self, n: ArchivedNodeRef) -> &'a ArchivedLayerSegment {
-        self.layers[n.layer as usize]
+        self.parts[n.part as usize]
     }
 
     fn string(seg: &'a ArchivedLayerSegment, i: u32) -> &'a str {
@@ -135,18 +141,18 @@ impl<'a> ArchivedScene<'a> {
         pick: fn(
             &'a ArchivedLayerSegment,
         ) -> (&'a ArchivedTermIndex, &'a ArchivedVec<rkyv::rend::u32_le>),
-    ) -> impl Iterator<Item = ArchivedNodeRef> + 'a {
-        let found = self.segment(layer).and_then(|(li, seg)| {
+    ) -> impl Iterator<Item = ArchivedNodeRef> {
+        let parts = self.segment(layer).map_or(0..0, |(_, r)| r);
+        let segs = &self.parts[parts.clone()];
+        parts.zip(segs).flat_map(move |(part, &seg)| {
             let (index, postings) = pick(seg);
-            let r = index.get(term)?;
-            Some((
-                li,
-                &u32s(postings)[r[0].to_native() as usize..r[1].to_native() as usize],
-            ))
-        });
-        found.into_iter().flat_map(|(li, rows)| {
-            rows.iter()
-                .map(move |&row| ArchivedNodeRef { layer: li, row })
+            let rows = index.get(term).map_or(&[][..], |r| {
+                &u32s(postings)[r[0].to_native() as usize..r[1].to_native() as usize]
+            });
+            rows.iter().map(move |&row| ArchivedNodeRef {
+                part: part as u32,
+                row,
+            })
         })
     }
 
@@ -157,6 +163,25 @@ impl<'a> ArchivedScene<'a> {
         map.get(term)
             .into_iter()
             .flat_map(|v| u32s(v).iter().map(|&l| LayerId(l)))
+    }
+
+    /// The index of the part at `part` of layer `layer` (id), if it has one.
+    fn part_index(&self, layer: u32, part: usize) -> Option<ArchivedIndex<'_>> {
+        let seg = self.parts[part];
+        let index = seg.layer_index.as_ref()?;
+        let tree = match index.tree_chunk.as_ref() {
+            Some(_) => self.tree_chunk(layer, seg.part.to_native(), 0)?,
+            None => &index.tree,
+        };
+        let patch = RowPatch::new(
+            index.base_rows.to_native(),
+            u32s(&index.patched),
+            u32s(&seg.point_offsets),
+            self.point_column(part as u32),
+        );
+        // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
+        // the tree's items by its base rows, and the patched rows by the part's rows.
+        Some(ArchivedIndex::patched(tree, u64s(&seg.ids), patch))
     }
 }
 
@@ -174,7 +199,8 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn layer_name(&self, layer: LayerId) -> Option<&str> {
-        self.segment(layer).map(|(_, s)| s.name.as_str())
+        self.segment(layer)
+            .map(|(i, _)| self.manifest.layers[i].name.as_str())
     }
 
     fn layer_by_name(&self, name: &str) -> Option<LayerId> {
@@ -188,7 +214,7 @@ impl SceneView for ArchivedScene<'_> {
     fn layer_children(&self, layer: LayerId) -> Vec<LayerId> {
         self.segment(layer)
             .map(|(i, _)| {
-                u32s(&self.manifest.layers[i as usize].children)
+                u32s(&self.manifest.layers[i].children)
                     .iter()
                     .map(|&l| LayerId(l))
                     .collect()
@@ -199,7 +225,7 @@ impl SceneView for ArchivedScene<'_> {
     fn layer_parents(&self, layer: LayerId) -> Vec<LayerId> {
         self.segment(layer)
             .map(|(i, _)| {
-                u32s(&self.manifest.layers[i as usize].parents)
+                u32s(&self.manifest.layers[i].parents)
                     .iter()
                     .map(|&l| LayerId(l))
                     .collect()
@@ -208,12 +234,17 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn layer_len(&self, layer: LayerId) -> usize {
-        self.segment(layer).map_or(0, |(_, s)| s.ids.len())
+        self.segment(layer)
+            .map_or(0, |(_, parts)| parts.map(|p| self.parts[p].ids.len()).sum())
     }
 
     fn layer_nodes(&self, layer: LayerId) -> impl Iterator<Item = ArchivedNodeRef> + '_ {
-        self.segment(layer).into_iter().flat_map(|(li, s)| {
-            (0..s.ids.len() as u32).map(move |row| ArchivedNodeRef { layer: li, row })
+        let parts = self.segment(layer).map_or(0..0, |(_, r)| r);
+        parts.flat_map(|part| {
+            (0..self.parts[part].ids.len() as u32).map(move |row| ArchivedNodeRef {
+                part: part as u32,
+                row,
+            })
         })
     }
 
@@ -222,9 +253,19 @@ impl SceneView for ArchivedScene<'_> {
             if !(m.min_id.to_native()..=m.max_id.to_native()).contains(&id.0) {
                 continue;
             }
-            if let Ok(row) = u64s(&self.layers[li].ids).binary_search(&id.0) {
+            let parts = self.part_range(li);
+            // Parts ascend by id (the join checked it): the last one starting at or
+            // below `id` is the only one that may hold it.
+            let segs = &self.parts[parts.clone()];
+            let k = segs
+                .partition_point(|p| u64s(&p.ids).first().is_some_and(|&f| f <= id.0))
+                .saturating_sub(1);
+            let Some(seg) = segs.get(k) else {
+                continue;
+            };
+            if let Ok(row) = u64s(&seg.ids).binary_search(&id.0) {
                 return Some(ArchivedNodeRef {
-                    layer: li as u32,
+                    part: (parts.start + k) as u32,
                     row: row as u32,
                 });
             }
@@ -242,7 +283,7 @@ impl SceneView for ArchivedScene<'_> {
 
     fn points(&self, n: ArchivedNodeRef) -> Points<'_> {
         let seg = self.seg(n);
-        self.point_column(n.layer)
+        self.point_column(n.part)
             .range(Self::range(&seg.point_offsets, n.row))
     }
 
@@ -260,23 +301,26 @@ impl SceneView for ArchivedScene<'_> {
         // usually in one of them (no copy), else merged.
         let mut run: Option<(&[u64], &[u32])> = None;
         let mut merged = Vec::new();
-        for &child_layer in u32s(&self.manifest.layers[n.layer as usize].children) {
-            let Some((_, seg)) = self.segment(LayerId(child_layer)) else {
+        let layer = self.layer_position(n.part);
+        for &child_layer in u32s(&self.manifest.layers[layer].children) {
+            let Some((_, parts)) = self.segment(LayerId(child_layer)) else {
                 continue;
             };
-            let rows = rows_under(seg, parent);
-            if rows.is_empty() {
-                continue;
+            for &seg in &self.parts[parts] {
+                let rows = rows_under(seg, parent);
+                if rows.is_empty() {
+                    continue;
+                }
+                let ids = u64s(&seg.ids);
+                if run.is_none() && merged.is_empty() {
+                    run = Some((ids, rows));
+                    continue;
+                }
+                if let Some((first_ids, first_rows)) = run.take() {
+                    merged.extend(first_rows.iter().map(|&r| NodeId(first_ids[r as usize])));
+                }
+                merged.extend(rows.iter().map(|&r| NodeId(ids[r as usize])));
             }
-            let ids = u64s(&seg.ids);
-            if run.is_none() && merged.is_empty() {
-                run = Some((ids, rows));
-                continue;
-            }
-            if let Some((first_ids, first_rows)) = run.take() {
-                merged.extend(first_rows.iter().map(|&r| NodeId(first_ids[r as usize])));
-            }
-            merged.extend(rows.iter().map(|&r| NodeId(ids[r as usize])));
         }
         if merged.is_empty() {
             let (ids, rows) = run.unwrap_or((&[], &[]));
@@ -300,27 +344,25 @@ impl SceneView for ArchivedScene<'_> {
 
     fn out_edges<'b>(&'b self, n: ArchivedNodeRef) -> impl Iterator<Item = EdgeRef<'b>> + 'b {
         let seg = self.seg(n);
-        let ids = u64s(&seg.ids);
-        let source = NodeId(ids[n.row as usize]);
+        let source = NodeId(u64s(&seg.ids)[n.row as usize]);
         let r = Self::range(&seg.out_offsets, n.row);
-        let targets = &u32s(&seg.out_targets)[r.clone()];
+        let targets = &u64s(&seg.out_targets)[r.clone()];
         let descs = &u32s(&seg.out_descriptions)[r];
         targets.iter().zip(descs).map(move |(&t, &d)| EdgeRef {
             source,
-            target: NodeId(ids[t as usize]),
+            target: NodeId(t),
             description: Self::string(seg, d),
         })
     }
 
     fn in_edges<'b>(&'b self, n: ArchivedNodeRef) -> impl Iterator<Item = EdgeRef<'b>> + 'b {
         let seg = self.seg(n);
-        let ids = u64s(&seg.ids);
-        let target = NodeId(ids[n.row as usize]);
+        let target = NodeId(u64s(&seg.ids)[n.row as usize]);
         let r = Self::range(&seg.in_offsets, n.row);
-        let sources = &u32s(&seg.in_sources)[r.clone()];
+        let sources = &u64s(&seg.in_sources)[r.clone()];
         let descs = &u32s(&seg.in_descriptions)[r];
         sources.iter().zip(descs).map(move |(&s, &d)| EdgeRef {
-            source: NodeId(ids[s as usize]),
+            source: NodeId(s),
             target,
             description: Self::string(seg, d),
         })
@@ -377,32 +419,26 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn layer_generation(&self, layer: LayerId) -> Option<u64> {
-        self.segment(layer).map(|(_, s)| s.generation.to_native())
+        self.segment(layer)
+            .map(|(i, _)| self.manifest.layers[i].generation.to_native())
     }
 
     fn layer_index(&self, layer: LayerId) -> Option<impl SpatialIndex + '_> {
-        let (position, seg) = self.segment(layer)?;
-        let index = seg.layer_index.as_ref()?;
-        let tree = match index.tree_chunk.as_ref() {
-            Some(_) => self.tree_chunk(seg.layer.to_native(), 0)?,
-            None => &index.tree,
-        };
-        let patch = RowPatch::new(
-            index.base_rows.to_native(),
-            u32s(&index.patched),
-            u32s(&seg.point_offsets),
-            self.point_column(position),
-        );
-        // `check_layer` (or, for a tree chunk, `validate_tree_chunk` and the join) bounded
-        // the tree's items by its base rows, and the patched rows by the layer's rows.
-        Some(ArchivedIndex::patched(tree, u64s(&seg.ids), patch))
+        let (_, parts) = self.segment(layer)?;
+        let mut indexes = parts.map(|p| self.part_index(layer.0, p));
+        // Every part of an indexed layer has an index (or the layer has none).
+        let first = indexes.next()??;
+        let rest: Option<Vec<_>> = indexes.collect();
+        Some(PartedIndex::new(first, rest?))
     }
 
     fn node_index(&self, node: NodeId) -> Option<impl SpatialIndex + '_> {
         let (seg, at) = self.node_index_position(node)?;
         let ni = &seg.node_indexes[at];
         let tree = match ni.tree_chunk.as_ref() {
-            Some(_) => self.tree_chunk(seg.layer.to_native(), 1 + at as u32)?,
+            Some(_) => {
+                self.tree_chunk(seg.layer.to_native(), seg.part.to_native(), 1 + at as u32)?
+            }
             // A publishing writer withholds small trees: the sub-tree is walked instead.
             None if ni.tree.size() == 0 => return None,
             None => &ni.tree,

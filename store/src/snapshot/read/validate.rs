@@ -247,8 +247,6 @@ pub fn check_layer(l: &ArchivedLayerSegment) -> Result<(), String> {
     {
         return Err("edge description columns differ in length from edge columns".into());
     }
-    check_below("out_targets", u32s(&l.out_targets), rows)?;
-    check_below("in_sources", u32s(&l.in_sources), rows)?;
     check_below("out_descriptions", u32s(&l.out_descriptions), nstr)?;
     check_below("in_descriptions", u32s(&l.in_descriptions), nstr)?;
     check_offsets(

@@ -1,0 +1,445 @@
+//! A layer split into **parts** for a publishing writer ([`super::SegmentCache`]): row
+//! chunks over disjoint, ascending ranges of node ids, each a [`LayerSegment`] of its own
+//! (with its own postings, `by_parent`, layer index and the node indexes rooted in it),
+//! sent only when its rows change. Appending a row, or changing `k` rows, resends the
+//! parts that hold them, not the layer.
+//!
+//! # Policy
+//! - The newest part (the *tail*, which covers every id above the others) takes appended
+//!   rows until it holds `tail` rows ([`PART_ROWS`](crate::snapshot::PART_ROWS)); the
+//!   next append starts a new tail, so the sealed part is not sent again. An agent pose
+//!   per tick costs the tail's rows (at most `tail`), whatever the trajectory's length.
+//! - Sealed parts that no change touched for [`COLD_UPDATES`] updates of their layer
+//!   merge with their right neighbour when it is at least as large and the two hold at
+//!   most `max` rows ([`MAX_PART_ROWS`](crate::snapshot::MAX_PART_ROWS)): like a binary
+//!   counter, a layer of `n` rows keeps O(log(n / tail) + n / max) parts, each row is
+//!   resent O(log(max / tail)) times by merges over its life, and a merge sends at most
+//!   `max` rows once. Parts that keep changing (the front of a sliding window) stay small.
+//! - A part past `max` rows (inserts in the middle, a bulk load) is split into pieces of
+//!   `max / 2`; an empty part is dropped (a layer keeps at least one).
+//! - Part numbers (in segment ids) are reused once freed, so they stay below the most
+//!   parts a layer had at once.
+//!
+//! Worst cases: an edit of any row resends its part (at most `max` rows); a merge or a
+//! split rebuilds and resends at most `max` rows (`2 * max` for a split of a bulk part).
+
+use super::chunk_state::PublishedLayer;
+use super::segment_cache::{Cached, patched};
+use crate::graph::LayerChanges;
+use crate::snapshot::chunking::part_segment_id;
+use crate::{LayerId, NodeId, SceneGraph};
+
+/// How a publishing writer splits layers into parts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct PartRows {
+    /// Rows the tail takes before a new tail starts.
+    pub(super) tail: usize,
+    /// Most rows of a part: merges stop below it, a larger part is split.
+    pub(super) max: usize,
+}
+
+/// Updates of its layer a sealed part must go untouched before it may merge.
+const COLD_UPDATES: u64 = 16;
+
+/// One part of a layer.
+pub(super) struct Part {
+    /// The part's number (in its segment id).
+    number: u32,
+    /// Smallest id the part covers (the first part covers every id below the second's
+    /// lower bound whatever its own).
+    low: u64,
+    pub(super) cached: Box<Cached>,
+    /// The layer's update count when the part last changed.
+    touched: u64,
+}
+
+/// A layer's parts, ascending by id range.
+pub(super) struct LayerParts {
+    /// The layer's incarnation (a removed layer's id may come back).
+    pub(super) incarnation: u64,
+    /// The layer generation the parts are current with (the layer's change journal
+    /// starts there).
+    pub(super) generation: u64,
+    pub(super) parts: Vec<Part>,
+    /// Part numbers freed, for reuse.
+    free: Vec<u32>,
+    /// The next part number never used.
+    next: u32,
+    /// Updates of the layer so far.
+    updates: u64,
+}
+
+impl LayerParts {
+    /// The layer built afresh: its rows in parts of at most `rows.max` (one part when
+    /// `rows` is `None`).
+    pub(super) fn full(graph: &SceneGraph, layer: LayerId, rows: Option<PartRows>) -> Box<Self> {
+        let l = &graph.layers[&layer];
+        let mut ids: Vec<u64> = l.nodes.iter().map(|n| n.0).collect();
+        ids.sort_unstable();
+        let mut parts = Box::new(LayerParts {
+            incarnation: l.incarnation,
+            generation: l.generation,
+            parts: Vec::new(),
+            free: Vec::new(),
+            next: 0,
+            updates: 0,
+        });
+        let piece = rows.map_or(usize::MAX, |r| r.max);
+        if ids.len() <= piece {
+            parts.push_built(graph, layer, 0, ids);
+        } else {
+            for chunk in ids.chunks(piece) {
+                let low = if parts.parts.is_empty() { 0 } else { chunk[0] };
+                parts.push_built(graph, layer, low, chunk.to_vec());
+            }
+        }
+        parts
+    }
+
+    /// Appends a part built afresh from `ids`, covering ids from `low`.
+    fn push_built(&mut self, graph: &SceneGraph, layer: LayerId, low: u64, ids: Vec<u64>) {
+        let number = self.allocate();
+        self.parts.push(Part {
+            number,
+            low,
+            cached: Cached::build(graph, layer, number, ids),
+            touched: self.updates,
+        });
+    }
+
+    fn allocate(&mut self) -> u32 {
+        self.free.pop().unwrap_or_else(|| {
+            self.next += 1;
+            self.next - 1
+        })
+    }
+
+    /// The part numbers in id order (what the manifest lists).
+    pub(super) fn numbers(&self) -> Vec<u32> {
+        self.parts.iter().map(|p| p.number).collect()
+    }
+
+    /// The smallest and largest id of the layer `l` from the parts, when they are current
+    /// with it.
+    pub(super) fn current_id_bounds(&self, l: &crate::graph::Layer) -> Option<(u64, u64)> {
+        if self.generation != l.generation || self.incarnation != l.incarnation {
+            return None;
+        }
+        fn ids(p: &Part) -> &[u64] {
+            &p.cached.segment.ids
+        }
+        let min = self.parts.iter().find_map(|p| ids(p).first().copied());
+        let max = self.parts.iter().rev().find_map(|p| ids(p).last().copied());
+        Some((min.unwrap_or(u64::MAX), max.unwrap_or(0)))
+    }
+
+    /// The part holding (or that would hold) node `id`.
+    fn route(&self, id: u64) -> usize {
+        self.parts
+            .partition_point(|p| p.low <= id)
+            .saturating_sub(1)
+    }
+
+    /// The parts brought up to date with the layer's journal `changes`, each changed part
+    /// patched row by row (or rebuilt, when its rows moved), then sealed, split, merged
+    /// or dropped by the policy; `None` when the journal cannot say what changed (a full
+    /// build is needed).
+    pub(super) fn patched(
+        mut self: Box<Self>,
+        graph: &SceneGraph,
+        layer: LayerId,
+        changes: LayerChanges,
+        rows: Option<PartRows>,
+    ) -> Option<Box<Self>> {
+        let l = &graph.layers[&layer];
+        if changes.everything || changes.since != self.generation {
+            return None;
+        }
+        self.updates += 1;
+        let in_layer = |id: &NodeId| graph.nodes.get(id).is_some_and(|n| n.layer == layer);
+        if let Some(rows) = rows {
+            self.seal_tail(&changes.nodes, rows, in_layer, graph, layer);
+        }
+        let mut routed: Vec<LayerChanges> = self
+            .parts
+            .iter()
+            .map(|p| LayerChanges::new(p.cached.segment.generation))
+            .collect();
+        for id in changes.nodes {
+            routed[self.route(id.0)].nodes.push(id);
+        }
+        for id in changes.removed {
+            routed[self.route(id.0)].removed.push(id);
+        }
+        for id in changes.index_roots {
+            routed[self.route(id.0)].index_roots.push(id);
+        }
+        let single = self.parts.len() == 1;
+        let parts = std::mem::take(&mut self.parts);
+        for (mut part, mut c) in parts.into_iter().zip(routed) {
+            if c.nodes.is_empty() && c.removed.is_empty() && c.index_roots.is_empty() {
+                self.parts.push(part);
+                continue;
+            }
+            c.geometry = changes.geometry;
+            let old_ids = part.cached.segment.ids.clone();
+            let expected = single.then_some(l.nodes.len());
+            let number = part.number;
+            let nodes = c.nodes.clone();
+            part.cached = match patched(graph, layer, *part.cached, c, expected) {
+                Some(cached) => cached,
+                None => {
+                    let mut ids: Vec<u64> = old_ids
+                        .into_iter()
+                        .filter(|&id| in_layer(&NodeId(id)))
+                        .chain(nodes.iter().filter(|id| in_layer(id)).map(|id| id.0))
+                        .collect();
+                    ids.sort_unstable();
+                    ids.dedup();
+                    Cached::build(graph, layer, number, ids)
+                }
+            };
+            part.touched = self.updates;
+            self.parts.push(part);
+        }
+        let total: usize = self.parts.iter().map(|p| p.cached.segment.ids.len()).sum();
+        if total != l.nodes.len() {
+            return None;
+        }
+        if let Some(rows) = rows {
+            self.split_large(graph, layer, rows);
+            self.drop_empty();
+            self.merge_cold(graph, layer, rows);
+        }
+        self.generation = l.generation;
+        Some(self)
+    }
+
+    /// Starts a new tail for the nodes appended above the tail's rows when the tail holds
+    /// `rows.tail` rows or more.
+    fn seal_tail(
+        &mut self,
+        changed: &[NodeId],
+        rows: PartRows,
+        in_layer: impl Fn(&NodeId) -> bool,
+        graph: &SceneGraph,
+        layer: LayerId,
+    ) {
+        let tail = &self.parts[self.parts.len() - 1].cached.segment;
+        let Some(&max) = tail.ids.last() else {
+            return;
+        };
+        if tail.ids.len() < rows.tail {
+            return;
+        }
+        let first_new = changed
+            .iter()
+            .filter(|id| id.0 > max && in_layer(id))
+            .map(|id| id.0)
+            .min();
+        if let Some(low) = first_new {
+            self.push_built(graph, layer, low, Vec::new());
+        }
+    }
+
+    /// Splits every part of more than `rows.max` rows into pieces of `rows.max / 2`.
+    fn split_large(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
+        if self
+            .parts
+            .iter()
+            .all(|p| p.cached.segment.ids.len() <= rows.max)
+        {
+            return;
+        }
+        let piece = (rows.max / 2).max(1);
+        let parts = std::mem::take(&mut self.parts);
+        for part in parts {
+            let ids = &part.cached.segment.ids;
+            if ids.len() <= rows.max {
+                self.parts.push(part);
+                continue;
+            }
+            let pieces: Vec<Vec<u64>> = ids.chunks(piece).map(<[u64]>::to_vec).collect();
+            self.free.push(part.number);
+            for (i, ids) in pieces.into_iter().enumerate() {
+                let low = if i == 0 { part.low } else { ids[0] };
+                self.push_built(graph, layer, low, ids);
+            }
+        }
+    }
+
+    /// Drops the empty parts, keeping at least one (the first part then covers the ids
+    /// below its neighbour's).
+    fn drop_empty(&mut self) {
+        let mut at = 0;
+        while at < self.parts.len() && self.parts.len() > 1 {
+            if self.parts[at].cached.segment.ids.is_empty() {
+                let gone = self.parts.remove(at);
+                self.free.push(gone.number);
+                if at == 0 {
+                    self.parts[0].low = 0;
+                }
+            } else {
+                at += 1;
+            }
+        }
+    }
+
+    /// Merges sealed parts untouched for [`COLD_UPDATES`] updates into their right
+    /// neighbour when it is at least as large and the two fit `rows.max`.
+    fn merge_cold(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
+        let cold = |p: &Part, now: u64| now - p.touched >= COLD_UPDATES;
+        let len = |p: &Part| p.cached.segment.ids.len();
+        // The tail (last part) never merges.
+        let mut at = self.parts.len().saturating_sub(2);
+        while at > 0 {
+            let (left, right) = (&self.parts[at - 1], &self.parts[at]);
+            if cold(left, self.updates)
+                && cold(right, self.updates)
+                && len(left) <= len(right)
+                && len(left) + len(right) <= rows.max
+            {
+                let right = self.parts.remove(at);
+                let left = &self.parts[at - 1];
+                let mut ids = left.cached.segment.ids.clone();
+                ids.extend_from_slice(&right.cached.segment.ids);
+                let number = left.number;
+                self.free.push(right.number);
+                self.parts[at - 1].cached = Cached::build(graph, layer, number, ids);
+                self.parts[at - 1].touched = self.updates;
+            }
+            at -= 1;
+        }
+    }
+}
+
+/// A layer as a publishing writer sends it: its parts in id order
+/// ([`super::SegmentCache::published_layer`]), each a [`PublishedLayer`].
+#[derive(Debug, Clone)]
+pub struct PublishedParts<'c> {
+    parts: Vec<PublishedLayer<'c>>,
+}
+
+impl<'c> PublishedParts<'c> {
+    pub(super) fn new(parts: &'c LayerParts) -> Self {
+        PublishedParts {
+            parts: parts
+                .parts
+                .iter()
+                .map(|p| PublishedLayer::new(&p.cached.segment, &p.cached.chunks))
+                .collect(),
+        }
+    }
+
+    /// The parts, in id order.
+    pub fn parts(&self) -> &[PublishedLayer<'c>] {
+        &self.parts
+    }
+
+    /// Every segment the layer publishes (parts, point chunks, tree chunks) as `(segment
+    /// id, generation)`, ascending by id.
+    pub fn segments(&self) -> Vec<(u64, u64)> {
+        let mut all: Vec<(u64, u64)> = Vec::with_capacity(self.parts.len());
+        for p in &self.parts {
+            all.push((p.segment_id(), p.segment.generation));
+            all.extend(p.chunks());
+            all.extend(p.tree_chunks().map(|(id, generation, _)| (id, generation)));
+        }
+        all.sort_unstable();
+        all
+    }
+
+    /// How many segments the layer publishes.
+    pub fn segment_count(&self) -> usize {
+        self.parts.iter().map(|p| 1 + p.chunk_segments()).sum()
+    }
+
+    /// The layer's segment ids, ascending: equal shapes mean the same segments.
+    pub fn shape(&self) -> Vec<u64> {
+        self.segments().into_iter().map(|(id, _)| id).collect()
+    }
+}
+
+impl PublishedLayer<'_> {
+    /// The segment id of this part.
+    pub fn segment_id(&self) -> u64 {
+        part_segment_id(LayerId(self.segment.layer), self.segment.part)
+            .expect("a part's number fits its segment id")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::snapshot::SegmentCache;
+
+    fn poses(n: u64) -> (SceneGraph, LayerId) {
+        let mut g = SceneGraph::new();
+        let l = g.add_layer("poses").unwrap();
+        for id in 0..n {
+            g.add_node(NodeId(id), l).unwrap();
+        }
+        (g, l)
+    }
+
+    fn part_rows(cache: &mut SegmentCache, g: &mut SceneGraph, l: LayerId) -> Vec<usize> {
+        cache
+            .published_layer(g, l)
+            .parts()
+            .iter()
+            .map(|p| p.segment.ids.len())
+            .collect()
+    }
+
+    #[test]
+    fn appends_fill_the_tail_then_seal_it_and_cold_parts_merge_like_a_binary_counter() {
+        let (mut g, l) = poses(0);
+        let mut cache = SegmentCache::new().with_part_rows(4, 16);
+        let mut sent_rows = 0;
+        for id in 0..200u64 {
+            g.add_node(NodeId(id), l).unwrap();
+            let published = cache.published_layer(&mut g, l);
+            let generation = g.layer_generation(l).unwrap();
+            sent_rows += published
+                .parts()
+                .iter()
+                .filter(|p| p.segment.generation == generation)
+                .map(|p| p.segment.ids.len())
+                .sum::<usize>();
+        }
+        let rows = part_rows(&mut cache, &mut g, l);
+        assert_eq!(rows.iter().sum::<usize>(), 200);
+        assert!(rows.iter().all(|&r| r <= 16), "{rows:?}");
+        assert!(rows.len() <= 200 / 16 + 6, "{rows:?}");
+        // Each append sends the tail (<= 4 rows) and merges resend each row a few times.
+        assert!(sent_rows <= 200 * 4 + 200 * 3, "{sent_rows} rows sent");
+        assert!(rows.iter().all(|&r| r > 0), "{rows:?}");
+    }
+
+    #[test]
+    fn removals_drop_empty_parts_and_a_bulk_part_is_split() {
+        let (mut g, l) = poses(100);
+        let mut cache = SegmentCache::new().with_part_rows(4, 16);
+        let rows = part_rows(&mut cache, &mut g, l);
+        assert_eq!(rows.len(), 7, "{rows:?}");
+        for id in 0..50 {
+            g.remove_node(NodeId(id)).unwrap();
+        }
+        let rows = part_rows(&mut cache, &mut g, l);
+        assert_eq!(rows.iter().sum::<usize>(), 50);
+        assert!(rows.iter().all(|&r| r > 0), "{rows:?}");
+        for id in 1000..1100 {
+            g.add_node(NodeId(id), l).unwrap();
+        }
+        let rows = part_rows(&mut cache, &mut g, l);
+        assert_eq!(rows.iter().sum::<usize>(), 150);
+        assert!(rows.iter().all(|&r| r <= 16), "{rows:?}");
+        for id in 50..100 {
+            g.remove_node(NodeId(id)).unwrap();
+        }
+        for id in 1000..1100 {
+            g.remove_node(NodeId(id)).unwrap();
+        }
+        assert_eq!(part_rows(&mut cache, &mut g, l), [0]);
+    }
+}
