@@ -1,6 +1,6 @@
 //! The synthetic segment content of `ygg-test-writer`, and its check.
 //!
-//! A synthetic layer segment is `YGGT`, four zero bytes, the segment id (u64 LE), the
+//! A synthetic layer segment is `YGGT`, the low 32 bits of the segment id (u32 LE), the
 //! generation (u64 LE), then
 //! one byte repeated. Readers use it to verify that a snapshot pairs every layer with the
 //! generation its manifest names. It is a transport test aid, not part of the protocol.
@@ -11,9 +11,9 @@ use ygg_transport::protocol::ManifestEntry;
 pub const MAGIC: &[u8; 4] = b"YGGT";
 
 /// Smallest synthetic segment.
-pub const MIN_LEN: usize = 24;
+pub const MIN_LEN: usize = 16;
 
-/// The byte repeated after the 24-byte head.
+/// The byte repeated after the 16-byte head.
 pub fn fill_byte(layer_id: u64, generation: u64) -> u8 {
     // Truncation intended: any byte that depends on both values.
     (layer_id.wrapping_mul(31) ^ generation) as u8
@@ -27,10 +27,10 @@ pub fn fill_byte(layer_id: u64, generation: u64) -> u8 {
 pub fn write(buf: &mut [u8], layer_id: u64, generation: u64) {
     let (head, rest) = buf.split_at_mut(MIN_LEN);
     head[0..4].copy_from_slice(MAGIC);
-    head[4..8].fill(0);
-    head[8..16].copy_from_slice(&layer_id.to_le_bytes());
-    head[16..24].copy_from_slice(&generation.to_le_bytes());
-    rest.fill(fill_byte(layer_id, generation));
+    // Truncation intended: test segment ids are small.
+    head[4..8].copy_from_slice(&(layer_id as u32).to_le_bytes());
+    head[8..16].copy_from_slice(&generation.to_le_bytes());
+    rest.fill(fill_byte(u64::from(layer_id as u32), generation));
 }
 
 /// Whether `bytes` look like a synthetic segment at all.
@@ -48,12 +48,13 @@ pub fn check(bytes: &[u8], entry: ManifestEntry) -> Result<(), String> {
     if !is_synthetic(bytes) {
         return Err(format!("layer {}: not a synthetic segment", entry.layer_id));
     }
-    let mut id = [0; 8];
-    id.copy_from_slice(&bytes[8..16]);
+    let mut id = [0; 4];
+    id.copy_from_slice(&bytes[4..8]);
     let mut generation = [0; 8];
-    generation.copy_from_slice(&bytes[16..24]);
-    let (id, generation) = (u64::from_le_bytes(id), u64::from_le_bytes(generation));
-    if (id, generation) != (entry.layer_id, entry.generation) {
+    generation.copy_from_slice(&bytes[8..16]);
+    let (id, generation) = (u64::from(u32::from_le_bytes(id)), u64::from_le_bytes(generation));
+    // Truncation intended: the head holds the id's low 32 bits.
+    if (id, generation) != (u64::from(entry.layer_id as u32), entry.generation) {
         return Err(format!(
             "layer {} generation {} holds layer {id} generation {generation}",
             entry.layer_id, entry.generation

@@ -266,7 +266,7 @@ fn a_cut_that_lies_about_an_unchanged_layer_is_refused_and_the_last_one_kept() {
     let err = refused(&mut reader, 3);
     assert!(
         matches!(err, SceneReceiveError::Invalid { generation: 3, .. })
-            && err.to_string().contains("does not match segment"),
+            && err.to_string().contains("counts 2 nodes, its parts hold 1"),
         "{err}"
     );
     assert_eq!(
