@@ -71,8 +71,7 @@ fn archive_sizes() -> Result<(), Box<dyn std::error::Error>> {
                     g.set_geometry(NodeId(i), vec![[i as f32, 0.0, 1.0]])?;
                 }
             }
-            let (manifest, layers) = g.to_segments();
-            let bytes = manifest.len() + layers.iter().map(|l| l.len()).sum::<usize>();
+            let bytes = g.to_segments().len();
             let per_node = bytes as f64 / n as f64;
             println!(
                 "| {n} | {points} | {bytes} | {per_node:.1} | {:.1} |",

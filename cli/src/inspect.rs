@@ -445,8 +445,7 @@ fn layouts_table(path: &Path, layouts: &[Layout]) -> Result<(), String> {
         let built: Duration = t.elapsed();
         let rows = layer_rows(&g);
         let sum = |f: fn(&LayerRow) -> usize| rows.iter().map(f).sum::<usize>();
-        let (manifest, segments) = g.to_segments();
-        let bytes = manifest.len() + segments.iter().map(|s| s.len()).sum::<usize>();
+        let bytes = g.to_segments().len();
         println!(
             "{:<10} {:>7} {:>10} {:>10} {:>8} {:>8} {:>10} {:>9} {:>11.2} {:>8.2}",
             l.name(),

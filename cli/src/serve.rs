@@ -58,6 +58,11 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = ygg_store::snapshot::POINT_CHUNK_LEN as u64,
           value_parser = clap::value_parser!(u64).range(1..=65536))]
     point_chunk_len: u64,
+    /// Rows the newest part of a layer takes before a new part starts: appending a node
+    /// resends at most this many rows of its layer.
+    #[arg(long, default_value_t = ygg_store::snapshot::PART_ROWS as u64,
+          value_parser = clap::value_parser!(u64).range(1..=65536))]
+    part_rows: u64,
 }
 
 /// Runs `ygg serve` until a signal or `--seconds`.
@@ -93,7 +98,8 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
     let loaded = t.elapsed();
     let builder = SceneWriter::builder(&args.scene)
         .max_readers(args.max_readers)
-        .point_chunk_len(args.point_chunk_len as usize);
+        .point_chunk_len(args.point_chunk_len as usize)
+        .part_rows(args.part_rows as usize);
     let builder = match args.max_layers {
         Some(n) => builder.max_layers(n),
         None => builder,
@@ -116,6 +122,7 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut next = start + period;
     let (mut ticks, mut update_ns, mut publish_ns, mut bytes) = (0u64, 0u128, 0u128, 0usize);
     let (mut layers_sent, mut chunks_sent) = (0usize, 0usize);
+    let (mut parts_sent, mut chunk_bytes, mut manifest_bytes, mut segments) = (0, 0, 0, 0);
     let mut last_report = start;
     let mut window = window::Window::new(writer.graph(), args.keep);
     let stop_reason = loop {
@@ -136,6 +143,10 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
             bytes += r.bytes_sent;
             layers_sent += r.layers_sent;
             chunks_sent += r.chunks_sent;
+            parts_sent += r.parts_sent;
+            chunk_bytes += r.chunk_bytes_sent;
+            manifest_bytes += r.manifest_bytes_sent;
+            segments = r.segments;
             ticks += 1;
         }
         if last_report.elapsed() >= Duration::from_secs(1) {
@@ -166,6 +177,8 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
         serde_json::json!({"event": "summary", "stop": stop_reason, "ticks": ticks, "seconds": secs,
             "updates_per_s": ticks as f64 / secs, "update_us": per(update_ns), "publish_us": per(publish_ns),
             "bytes_published": bytes, "layers_sent": layers_sent, "chunks_sent": chunks_sent,
+            "parts_sent": parts_sent, "chunk_bytes": chunk_bytes, "manifest_bytes": manifest_bytes,
+            "segments": segments,
             "generation": writer.generation(), "nodes": writer.graph().node_count(),
             "rss_mb": rss_mb()})
     );

@@ -1,33 +1,25 @@
 //! [`JoinMemo`]: what a reader's last accepted cut lets it skip when joining the next.
 
-use ygg_store::snapshot::{
-    ArchivedManifest, ArchivedManifestLayer, CheckedManifest, chunk_segment_layer,
-};
+use ygg_store::snapshot::{ArchivedManifest, ArchivedManifestLayer, chunk_segment_layer};
 
-/// What the last cut a [`crate::SceneReader`] accepted lets it skip in the next one: its
-/// manifest, whose structure was checked, and per manifest position the layer's id,
-/// generation and node count if it named no chunk.
+/// What the last cut a [`crate::SceneReader`] accepted lets it skip in the next one: per
+/// manifest position, the layer's id, generation and node count if it named no chunk.
+/// (Whether the structure is the one accepted, the reader tells by the structure
+/// segment's identity.)
 #[derive(Debug, Default)]
 pub(crate) struct JoinMemo {
-    manifest: Option<CheckedManifest>,
     /// Per position in the last accepted manifest: `(layer id, generation, node count)`
-    /// of a layer that named no point or tree chunk, `None` for one that did. A manifest
-    /// of the same structure lists the same layers at the same positions.
+    /// of a layer that named no point or tree chunk, `None` for one that did. A cut of the
+    /// same structure lists the same layers at the same positions.
     plain_layers: Vec<Option<(u32, u64, u64)>>,
 }
 
 impl JoinMemo {
-    /// `bytes` as a manifest without validating them again, if they have the structure of
-    /// the last accepted cut's manifest (see [`CheckedManifest::same_structure`]).
-    pub(crate) fn same_structure<'a>(&self, bytes: &'a [u8]) -> Option<&'a ArchivedManifest> {
-        self.manifest.as_ref()?.same_structure(bytes)
-    }
-
     /// Whether a join may take the layer of manifest entry `entry`, at position `at` of a
-    /// manifest with the structure of the last accepted one (so the same parts), as
-    /// checked, given that the caller found every part's bytes to be the same as in the
-    /// last accepted cut: the layer had this id, generation and node count there and
-    /// named no chunk.
+    /// cut with the structure of the last accepted one (so the same parts), as checked,
+    /// given that the caller found every part's bytes to be the same as in the last
+    /// accepted cut: the layer had this id, generation and node count there and named no
+    /// chunk.
     pub(crate) fn knows_layer(&self, at: usize, entry: &ArchivedManifestLayer) -> bool {
         let now = (
             entry.id.to_native(),
@@ -37,18 +29,12 @@ impl JoinMemo {
         self.plain_layers.get(at) == Some(&Some(now))
     }
 
-    /// Remembers an accepted cut: its manifest (read from `bytes`; copied unless its
-    /// structure is the one remembered already) and the segment ids it listed.
+    /// Remembers an accepted cut: its manifest and the segment ids it listed.
     pub(crate) fn remember(
         &mut self,
-        bytes: &[u8],
         manifest: &ArchivedManifest,
-        same_structure: bool,
         segment_ids: impl Iterator<Item = u64>,
     ) {
-        if !same_structure {
-            self.manifest = Some(CheckedManifest::new(bytes, manifest));
-        }
         let mut chunked: Vec<u32> = segment_ids
             .filter_map(|id| chunk_segment_layer(id).map(|l| l.0))
             .collect();

@@ -5,10 +5,10 @@
 //! validated (rkyv bytecheck plus the store's consistency pass) before any query touches
 //! it. A layer segment is validated once per identity `(session, layer, generation)`;
 //! later snapshots reuse the result only when they hand out the very same bytes (same
-//! address and length, which the transport guarantees for an unchanged layer). A manifest
-//! that differs from the last accepted one only in its per-cut integers is compared, not
-//! validated again, and the join of the cut re-checks only the layers that changed
-//! ([`crate::join_memo`]).
+//! address and length, which the transport guarantees for an unchanged layer). The manifest
+//! (fixed-size per-cut values) is validated each cut; the structure segment (names, DAG,
+//! parts, term indexes) once per generation, and the join of the cut re-checks only the
+//! layers that changed ([`crate::join_memo`]).
 //!
 //! Validation is a check at one moment. The reader maps samples read-only, but the
 //! writer keeps its read-write mapping, and any process of the same user can open the
@@ -29,8 +29,9 @@ use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
     ArchivedScene, KnownParts, SegmentBytes, chunk_unchecked, is_chunk_segment_id,
-    is_tree_chunk_segment_id, layer_unchecked, manifest_unchecked, segment_layer_part,
-    tree_chunk_unchecked, validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
+    is_part_segment_id, is_structure_segment_id, is_tree_chunk_segment_id, layer_unchecked,
+    manifest_unchecked, segment_layer_part, structure_unchecked, tree_chunk_unchecked,
+    validate_chunk, validate_layer, validate_manifest, validate_structure, validate_tree_chunk,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -86,20 +87,22 @@ impl SceneSnapshot {
         }
     }
 
-    /// How many of the snapshot's segments are layers and how many point chunks: the
-    /// rest, sorted after them by segment id, are tree chunks.
+    /// How many of the snapshot's segments are parts and how many point chunks: the
+    /// rest, sorted after them by segment id, are tree chunks and, last, the structure.
     fn segment_counts(&self) -> (usize, usize) {
-        let (mut layers, mut points) = (0, 0);
+        let (mut parts, mut points) = (0, 0);
         for (entry, _) in self.inner.layers() {
-            if is_tree_chunk_segment_id(entry.layer_id) {
-                break;
-            } else if is_chunk_segment_id(entry.layer_id) {
+            if is_part_segment_id(entry.layer_id) {
+                parts += 1;
+            } else if is_chunk_segment_id(entry.layer_id)
+                && !is_tree_chunk_segment_id(entry.layer_id)
+            {
                 points += 1;
             } else {
-                layers += 1;
+                break;
             }
         }
-        (layers, points)
+        (parts, points)
     }
 }
 
@@ -107,21 +110,25 @@ impl SceneSnapshot {
     /// The scene as a [`ygg_store::SceneView`]: every query of the store runs on it.
     pub fn view(&self) -> ArchivedScene<'_> {
         // SAFETY: a `SceneSnapshot` is only built by `SceneReader::accept`, after the
-        // manifest bytes of `self.inner` passed `validate_manifest` (or were found equal
-        // to validated ones but for integer fields, `CheckedManifest::same_structure`)
-        // and every layer's bytes passed `validate_layer` (cached per identical address,
-        // length and identity). `self.inner` keeps those exact samples mapped and
-        // unchanged.
+        // manifest bytes of `self.inner` passed `validate_manifest`, its structure's
+        // `validate_structure`, and every part's bytes `validate_layer` (each chunk's
+        // `validate_chunk` or `validate_tree_chunk`; cached per identical address, length
+        // and identity). `self.inner` keeps those exact samples mapped and unchanged.
         let (manifest, segments) = self.bytes();
         // SAFETY: see above; in copy mode the bytes are the private copies that were
         // validated, which nothing but this reader can reach.
         let manifest = unsafe { manifest_unchecked(manifest) };
-        let (layer_count, point_count) = self.segment_counts();
-        let (layers, chunks) = segments.split_at(layer_count);
+        let (part_count, point_count) = self.segment_counts();
+        let (structure, segments) = segments
+            .split_last()
+            .expect("an accepted cut has a structure");
+        // SAFETY: as above, the structure's bytes passed `validate_structure`.
+        let structure = unsafe { structure_unchecked(structure) };
+        let (layers, chunks) = segments.split_at(part_count);
         let (chunks, trees) = chunks.split_at(point_count);
         let layers = layers
             .iter()
-            // SAFETY: as above, each layer's bytes were validated before `accept` returned.
+            // SAFETY: as above, each part's bytes were validated before `accept` returned.
             .map(|bytes| unsafe { layer_unchecked(bytes) })
             .collect();
         let chunks = chunks
@@ -135,7 +142,7 @@ impl SceneSnapshot {
             .map(|bytes| unsafe { tree_chunk_unchecked(bytes) })
             .collect();
         // `accept` joined this cut (`ArchivedScene::rejoin`).
-        ArchivedScene::new_prechecked(manifest, layers, chunks, trees)
+        ArchivedScene::new_prechecked(manifest, structure, layers, chunks, trees)
     }
 
     /// The snapshot generation.
@@ -335,13 +342,9 @@ impl SceneReader {
             source,
         };
         let (manifest_bytes, segment_bytes) = accepted.bytes();
-        let (manifest, same_structure) = match self.memo.same_structure(manifest_bytes) {
-            Some(m) => (m, true),
-            None => (
-                validate_manifest(manifest_bytes, "manifest").map_err(invalid)?,
-                false,
-            ),
-        };
+        let manifest = validate_manifest(manifest_bytes, "manifest").map_err(invalid)?;
+        let mut structure = None;
+        let mut same_structure = false;
         let mut layers = Vec::with_capacity(snap.layer_count());
         let mut known_layers = Vec::with_capacity(manifest.layers.len());
         let mut part_known = Vec::with_capacity(snap.layer_count());
@@ -368,7 +371,24 @@ impl SceneReader {
                 }
             };
             let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
-            if is_tree_chunk_segment_id(entry.layer_id) {
+            if structure.is_some() {
+                // Entries are sorted by id, so the structure comes last: the writer broke that.
+                return Err(invalid(SnapshotError::Inconsistent {
+                    what: what(),
+                    reason: "a segment listed after the structure".into(),
+                }));
+            } else if is_structure_segment_id(entry.layer_id) {
+                // A structure some accepted cut had was checked by its join.
+                same_structure = known;
+                structure = Some(if known {
+                    // SAFETY: these exact bytes (same address, length and identity) passed
+                    // `validate_structure` earlier, and the transport never changes a
+                    // published sample.
+                    unsafe { structure_unchecked(bytes) }
+                } else {
+                    validate_structure(bytes, &what()).map_err(invalid)?
+                });
+            } else if is_tree_chunk_segment_id(entry.layer_id) {
                 trees.push(if known {
                     // SAFETY: these exact bytes (same address, length and identity) passed
                     // `validate_tree_chunk` earlier, and the transport never changes a
@@ -414,6 +434,12 @@ impl SceneReader {
             newly += usize::from(!known);
             identities.push((entry.layer_id, identity));
         }
+        let Some(structure) = structure else {
+            return Err(invalid(SnapshotError::Inconsistent {
+                what: "snapshot".into(),
+                reason: "the manifest names no structure segment".into(),
+            }));
+        };
         // A layer is known when its entry and every one of its parts are as in the last
         // accepted cut (parts and manifest entries both ascend by layer id).
         let mut parts = part_known.iter().peekable();
@@ -433,18 +459,16 @@ impl SceneReader {
             structure: same_structure,
             layers: &known_layers,
         };
-        ArchivedScene::rejoin(manifest, layers, chunks, trees, known).map_err(|reason| {
-            invalid(SnapshotError::Inconsistent {
-                what: "snapshot".into(),
-                reason,
-            })
-        })?;
-        self.memo.remember(
-            manifest_bytes,
-            manifest,
-            same_structure,
-            identities.iter().map(|(id, _)| *id),
-        );
+        ArchivedScene::rejoin(manifest, structure, layers, chunks, trees, known).map_err(
+            |reason| {
+                invalid(SnapshotError::Inconsistent {
+                    what: "snapshot".into(),
+                    reason,
+                })
+            },
+        )?;
+        self.memo
+            .remember(manifest, identities.iter().map(|(id, _)| *id));
         self.validations += newly as u64;
         self.validated = identities;
         self.current = Some(accepted.clone());

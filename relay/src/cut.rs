@@ -8,8 +8,8 @@ use std::sync::Arc;
 
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
-    SegmentBytes, is_chunk_segment_id, is_tree_chunk_segment_id, validate_chunk, validate_layer,
-    validate_manifest, validate_tree_chunk,
+    SegmentBytes, is_chunk_segment_id, is_structure_segment_id, is_tree_chunk_segment_id,
+    validate_chunk, validate_layer, validate_manifest, validate_structure, validate_tree_chunk,
 };
 use ygg_transport::ManifestEntry;
 use ygg_transport::protocol::{SegmentError, decode_manifest_prefix};
@@ -78,9 +78,9 @@ impl Assembler {
         Self::default()
     }
 
-    /// Validates a segment (the store's `validate_layer`, or `validate_chunk` /
-    /// `validate_tree_chunk` for a point or tree chunk: what a local reader runs) and
-    /// keeps it.
+    /// Validates a segment (the store's `validate_layer` for a part, `validate_chunk` /
+    /// `validate_tree_chunk` for a point or tree chunk, `validate_structure` for the
+    /// structure: what a local reader runs) and keeps it.
     ///
     /// # Errors
     /// Why the bytes are not a valid segment; nothing is kept then.
@@ -95,7 +95,9 @@ impl Assembler {
             return Ok(());
         }
         let what = format!("segment {id} generation {generation}");
-        if is_tree_chunk_segment_id(id) {
+        if is_structure_segment_id(id) {
+            validate_structure(&bytes, &what)?;
+        } else if is_tree_chunk_segment_id(id) {
             validate_tree_chunk(&bytes, &what)?;
         } else if is_chunk_segment_id(id) {
             validate_chunk(&bytes, &what)?;
@@ -212,7 +214,8 @@ mod tests {
         out
     }
 
-    /// Two generations of a two-layer graph: (manifest payload, layer segments) each.
+    /// Two generations of a two-layer graph: (manifest payload, its segments: the layers'
+    /// parts and the structure) each.
     fn generations() -> Vec<(SegmentBytes, Vec<(ManifestEntry, SegmentBytes)>)> {
         let mut g = SceneGraph::new();
         let a = g.add_layer("a").expect("layer");
@@ -223,18 +226,28 @@ mod tests {
         for step in 0..2 {
             g.set_geometry(NodeId(1), vec![[step as f32, 0.0, 0.0]])
                 .expect("geometry");
-            let (manifest, layers) = g.to_segments();
-            let entries: Vec<ManifestEntry> = g
+            let archived = g.to_segments();
+            let mut entries: Vec<ManifestEntry> = g
                 .layers()
                 .map(|l| ManifestEntry {
                     layer_id: ygg_store::snapshot::part_segment_id(l, 0).expect("fits"),
                     generation: g.layer_generation(l).expect("layer"),
                 })
                 .collect();
+            // `to_segments` archives structure generation 1.
+            entries.push(ManifestEntry {
+                layer_id: ygg_store::snapshot::STRUCTURE_SEGMENT_ID,
+                generation: 1,
+            });
+            let mut segments = archived.layers;
+            segments.push(archived.structure);
             let mut payload = vec![0; manifest_prefix_len(entries.len())];
             encode_manifest_prefix(&entries, &mut payload);
-            payload.extend_from_slice(&manifest);
-            out.push((aligned(&payload), entries.into_iter().zip(layers).collect()));
+            payload.extend_from_slice(&archived.manifest);
+            out.push((
+                aligned(&payload),
+                entries.into_iter().zip(segments).collect(),
+            ));
         }
         out
     }
@@ -245,7 +258,7 @@ mod tests {
         let mut asm = Assembler::new();
         let (manifest0, layers0) = &gens[0];
         assert!(asm.add_manifest(1, 1, manifest0.clone()).expect("valid"));
-        assert_eq!(asm.missing().len(), 2, "the manifest came first: a gap");
+        assert_eq!(asm.missing().len(), 3, "the manifest came first: a gap");
         assert!(asm.take_cut().is_none());
         for (e, bytes) in layers0 {
             asm.add_segment(1, e.layer_id, e.generation, bytes.clone())

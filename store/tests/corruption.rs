@@ -8,8 +8,8 @@ use ygg_store::index::SpatialIndex;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::{
     ArchivedScene, FORMAT_VERSION, KnownParts, LayerSegment, Manifest, PointChunk, PointChunkRef,
-    SegmentBytes, TreeChunk, TreeChunkRef, archive, validate_chunk, validate_layer,
-    validate_manifest, validate_tree_chunk,
+    SegmentBytes, Structure, TreeChunk, TreeChunkRef, archive, validate_chunk, validate_layer,
+    validate_manifest, validate_structure, validate_tree_chunk,
 };
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView, Scope, SnapshotFile};
 
@@ -182,50 +182,69 @@ fn thousands_of_random_corruptions_never_panic() {
 
 /// Checks the cut of `manifest` (tampered by the caller) with `g`'s layer segments, as a
 /// reader does: bytecheck of every segment, then `ArchivedScene::new`.
-fn check_cut(g: &SceneGraph, manifest: &Manifest) -> Result<(), String> {
+fn check_cut(g: &SceneGraph, structure: &Structure, manifest: &Manifest) -> Result<(), String> {
     let layers: Vec<SegmentBytes> = g.layers().map(|l| archive(&g.layer_segment(l))).collect();
     let manifest = archive(manifest);
     let manifest = validate_manifest(&manifest, "manifest").map_err(|e| e.to_string())?;
+    let structure = archive(structure);
+    let structure = validate_structure(&structure, "structure").map_err(|e| e.to_string())?;
     let layers = layers
         .iter()
         .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    ArchivedScene::new(manifest, layers, Vec::new(), Vec::new()).map(|_| ())
+    ArchivedScene::new(manifest, structure, layers, Vec::new(), Vec::new()).map(|_| ())
 }
 
 #[test]
 fn inconsistent_manifests_are_refused_naming_what_is_wrong() {
     let g = sample_scene();
-    check_cut(&g, &g.manifest(1)).expect("the intact cut is accepted");
+    let m = g.manifest(1, 1);
+    check_cut(&g, &g.structure(1), &m).expect("the intact cut is accepted");
 
-    let mut m = g.manifest(1);
-    m.label_layers.insert("chair".into(), vec![99]);
-    let e = check_cut(&g, &m).unwrap_err();
+    let mut s = g.structure(1);
+    s.label_layers.insert("chair".into(), vec![99]);
+    let e = check_cut(&g, &s, &m).unwrap_err();
     assert!(e.contains("graph index names an unknown layer"), "{e}");
 
-    let mut m = g.manifest(1);
-    m.layers[0].children.push(99);
-    let e = check_cut(&g, &m).unwrap_err();
+    let mut s = g.structure(1);
+    s.layers[0].children.push(99);
+    let e = check_cut(&g, &s, &m).unwrap_err();
     assert!(e.contains("DAG edge to an unknown layer"), "{e}");
 
-    let mut m = g.manifest(1);
-    let last = m.layers[2].children.clone();
-    m.layers[2].children = m.layers[1].children.clone();
-    m.layers[1].children = last;
-    let e = check_cut(&g, &m).unwrap_err();
+    let mut s = g.structure(1);
+    let last = s.layers[2].children.clone();
+    s.layers[2].children = s.layers[1].children.clone();
+    s.layers[1].children = last;
+    let e = check_cut(&g, &s, &m).unwrap_err();
     assert!(e.contains("is not mirrored"), "{e}");
 
     // Layers out of order: refused before any id is looked up by binary search.
-    let mut m = g.manifest(1);
-    m.layers.swap(0, 1);
-    let e = check_cut(&g, &m).unwrap_err();
-    assert!(e.contains("manifest layers are not ascending"), "{e}");
+    let mut s = g.structure(1);
+    s.layers.swap(0, 1);
+    let e = check_cut(&g, &s, &m).unwrap_err();
+    assert!(e.contains("structure layers are not ascending"), "{e}");
+
+    // A part listed twice, a structure of another generation, a manifest of other
+    // layers.
+    let mut s = g.structure(1);
+    s.layers[1].parts.push(0);
+    let e = check_cut(&g, &s, &m).unwrap_err();
+    assert!(e.contains("a part twice"), "{e}");
+    let e = check_cut(&g, &g.structure(2), &m).unwrap_err();
+    assert!(
+        e.contains("manifest names structure 1, structure 2 given"),
+        "{e}"
+    );
+    let mut other = g.manifest(1, 1);
+    other.layers.pop();
+    let e = check_cut(&g, &g.structure(1), &other).unwrap_err();
+    assert!(e.contains("not the 3 of its structure"), "{e}");
 }
 
 /// The sample scene's segments with every layer's point column split into chunks of 4
 /// points (as a publishing writer splits a large layer), before archiving: the
 /// manifest, the layer segments, and the chunks in layer and column order.
-fn chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<PointChunk>) {
+fn chunked_cut(g: &SceneGraph) -> ((Manifest, Structure), Vec<LayerSegment>, Vec<PointChunk>) {
     let mut layers = Vec::new();
     let mut chunks = Vec::new();
     for l in g.layers() {
@@ -243,17 +262,18 @@ fn chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<PointChunk>)
         }
         layers.push(s);
     }
-    (g.manifest(1), layers, chunks)
+    ((g.manifest(1, 1), g.structure(1)), layers, chunks)
 }
 
 /// Archives and checks a cut as a reader does (bytecheck of every segment, then
 /// `ArchivedScene::new`), then reads every node's points; the number of points read.
 fn check_chunked_cut(
-    manifest: &SegmentBytes,
+    head: &(SegmentBytes, SegmentBytes),
     layers: &[SegmentBytes],
     chunks: &[SegmentBytes],
 ) -> Result<usize, String> {
-    let manifest = validate_manifest(manifest, "manifest").map_err(|e| e.to_string())?;
+    let manifest = validate_manifest(&head.0, "manifest").map_err(|e| e.to_string())?;
+    let structure = validate_structure(&head.1, "structure").map_err(|e| e.to_string())?;
     let layers = layers
         .iter()
         .map(|b| validate_layer(b, "layer").map_err(|e| e.to_string()))
@@ -262,7 +282,7 @@ fn check_chunked_cut(
         .iter()
         .map(|b| validate_chunk(b, "chunk").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    let view = ArchivedScene::new(manifest, layers, chunks, Vec::new())?;
+    let view = ArchivedScene::new(manifest, structure, layers, chunks, Vec::new())?;
     let mut points = 0;
     for l in view.layers() {
         for n in view.layer_nodes(l) {
@@ -276,10 +296,14 @@ fn check_chunked_cut(
 }
 
 fn archive_cut(
-    cut: &(Manifest, Vec<LayerSegment>, Vec<PointChunk>),
-) -> (SegmentBytes, Vec<SegmentBytes>, Vec<SegmentBytes>) {
+    cut: &((Manifest, Structure), Vec<LayerSegment>, Vec<PointChunk>),
+) -> (
+    (SegmentBytes, SegmentBytes),
+    Vec<SegmentBytes>,
+    Vec<SegmentBytes>,
+) {
     (
-        archive(&cut.0),
+        (archive(&cut.0.0), archive(&cut.0.1)),
         cut.1.iter().map(archive).collect(),
         cut.2.iter().map(archive).collect(),
     )
@@ -339,12 +363,13 @@ fn inconsistent_point_chunks_are_refused_naming_what_is_wrong() {
 /// taking the structure and the layers flagged in `known` as checked; the number of
 /// points the view reads.
 fn rejoin_chunked_cut(
-    manifest: &SegmentBytes,
+    head: &(SegmentBytes, SegmentBytes),
     layers: &[SegmentBytes],
     chunks: &[SegmentBytes],
     known: &[bool],
 ) -> Result<usize, String> {
-    let manifest = validate_manifest(manifest, "manifest").map_err(|e| e.to_string())?;
+    let manifest = validate_manifest(&head.0, "manifest").map_err(|e| e.to_string())?;
+    let structure = validate_structure(&head.1, "structure").map_err(|e| e.to_string())?;
     let layers: Vec<_> = layers
         .iter()
         .map(|b| validate_layer(b, "layer").unwrap())
@@ -357,7 +382,7 @@ fn rejoin_chunked_cut(
         structure: true,
         layers: known,
     };
-    let view = ArchivedScene::rejoin(manifest, layers, chunks, Vec::new(), known)?;
+    let view = ArchivedScene::rejoin(manifest, structure, layers, chunks, Vec::new(), known)?;
     Ok(view
         .layers()
         .flat_map(|l| view.layer_nodes(l))
@@ -457,7 +482,7 @@ fn random_corruptions_of_point_chunks_never_panic() {
 /// publishing writer sends a large one): the manifest, the layer segments, and the tree
 /// chunks in layer order, then slot order (the layer index's base tree at slot 0, node
 /// index `i`'s tree at slot `1 + i`).
-fn tree_chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<TreeChunk>) {
+fn tree_chunked_cut(g: &SceneGraph) -> ((Manifest, Structure), Vec<LayerSegment>, Vec<TreeChunk>) {
     let mut layers = Vec::new();
     let mut trees = Vec::new();
     let empty = || KdTree::new_from_entries(&[]).unwrap();
@@ -490,16 +515,18 @@ fn tree_chunked_cut(g: &SceneGraph) -> (Manifest, Vec<LayerSegment>, Vec<TreeChu
         }
         layers.push(s);
     }
-    (g.manifest(1), layers, trees)
+    ((g.manifest(1, 1), g.structure(1)), layers, trees)
 }
 
 /// Archives and checks a tree-chunked cut as a reader does, then runs every spatial
 /// query on every layer index; the number of points the indexes hold.
 fn check_tree_chunked_cut(
-    cut: &(Manifest, Vec<LayerSegment>, Vec<TreeChunk>),
+    cut: &((Manifest, Structure), Vec<LayerSegment>, Vec<TreeChunk>),
     tamper: impl FnOnce(&mut Vec<SegmentBytes>),
 ) -> Result<usize, String> {
-    let manifest = archive(&cut.0);
+    let manifest = archive(&cut.0.0);
+    let structure = archive(&cut.0.1);
+    let structure = validate_structure(&structure, "structure").map_err(|e| e.to_string())?;
     let layers: Vec<SegmentBytes> = cut.1.iter().map(archive).collect();
     let mut trees: Vec<SegmentBytes> = cut.2.iter().map(archive).collect();
     tamper(&mut trees);
@@ -512,7 +539,7 @@ fn check_tree_chunked_cut(
         .iter()
         .map(|b| validate_tree_chunk(b, "tree chunk").map_err(|e| e.to_string()))
         .collect::<Result<Vec<_>, _>>()?;
-    let view = ArchivedScene::new(manifest, layers, Vec::new(), trees)?;
+    let view = ArchivedScene::new(manifest, structure, layers, Vec::new(), trees)?;
     let mut points = 0;
     for l in view.layers() {
         if let Some(index) = view.layer_index(l) {

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use ygg_store::query::{self, Direction};
 use ygg_store::snapshot::{SegmentCache, archive};
 use ygg_store::{FeatureRef, NodeId, SceneGraph, SceneView, Scope};
-use ygg_testkit::fingerprint::{manifest_fingerprint, segment_fingerprint};
+use ygg_testkit::fingerprint::{manifest_fingerprint, segment_fingerprint, structure_fingerprint};
 
 /// Everything a view can tell, in a canonical order: equal fingerprints mean equal graphs.
 fn fingerprint<V: SceneView>(v: &V) -> String {
@@ -161,8 +161,8 @@ proptest! {
             let _ = apply(&mut g, op);
             if i % publish_every == 0 || i + 1 == ops.len() {
                 for publisher in &mut publishers {
-                    let (manifest, ids) = publisher.publish(&mut g);
-                    let segments = publisher.validated(&manifest, &ids);
+                    let (manifest, structure, ids) = publisher.publish(&mut g);
+                    let segments = publisher.validated(&manifest, &structure, &ids);
                     let view = segments.join().map_err(|e| TestCaseError::fail(format!("after op {i} ({op:?}): {e}")))?;
                     prop_assert_eq!(fingerprint(&g), fingerprint(&view), "after op {} ({:?})", i, op);
                     prop_assert_eq!(query_answers(&g), query_answers(&view), "after op {} ({:?})", i, op);
@@ -203,10 +203,13 @@ proptest! {
                     let cached = segment_fingerprint(cache.layer_segment(&mut g, l));
                     prop_assert_eq!(cached, fresh, "layer {} after op {} ({:?})", l, i, op);
                 }
-                let fresh = g.manifest(i as u64);
                 // Only the touched layers' entries are refreshed when the structure held,
                 // and the kept bytes are patched: they equal the manifest archived anew.
                 let bytes = cache.manifest_bytes(&g, i as u64, Some(&touched)).to_vec();
+                let (structure, structure_bytes) = cache.structure().expect("built");
+                prop_assert_eq!(structure_fingerprint(structure), structure_fingerprint(&g.structure(0)));
+                prop_assert_eq!(structure_bytes, &archive(structure)[..]);
+                let fresh = g.manifest(i as u64, structure.generation);
                 let cached = cache.manifest(&g, i as u64);
                 prop_assert_eq!(manifest_fingerprint(cached), manifest_fingerprint(&fresh));
                 prop_assert_eq!(&bytes[..], &archive(cached)[..]);

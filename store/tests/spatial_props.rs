@@ -395,8 +395,8 @@ fn check_reader_indexes<V: SceneView>(v: &V, probes: &[Probe], cache: &mut Index
 /// Checks every query on the segments a publishing writer sends for `g` now, as a
 /// reader that kept the unchanged parts and chunks sees them.
 fn check_published(g: &mut SceneGraph, publisher: &mut Publisher, probes: &[Probe]) {
-    let (manifest, ids) = publisher.publish(g);
-    let segments = publisher.validated(&manifest, &ids);
+    let (manifest, structure, ids) = publisher.publish(g);
+    let segments = publisher.validated(&manifest, &structure, &ids);
     let view = segments.join().unwrap();
     check_view(&view, probes);
     for l in g.layers() {

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use ygg_store::index::KdTree;
 use ygg_store::query;
-use ygg_store::snapshot::{LayerSegment, Manifest, archive};
+use ygg_store::snapshot::{LayerSegment, Manifest, Structure, archive};
 use ygg_store::{LayerId, SceneView};
 
 /// A layer segment with every string index resolved, in a canonical order: equal for
@@ -68,16 +68,23 @@ pub fn segment_fingerprint(s: &LayerSegment) -> String {
 
 /// A manifest in a canonical order.
 pub fn manifest_fingerprint(m: &Manifest) -> String {
+    format!(
+        "{} {} {} {:?}",
+        m.version, m.generation, m.structure, m.layers
+    )
+}
+
+/// A structure in a canonical order, but for its generation.
+pub fn structure_fingerprint(s: &Structure) -> String {
     fn sorted(map: &std::collections::HashMap<String, Vec<u32>>) -> BTreeMap<&String, &Vec<u32>> {
         map.iter().collect()
     }
     format!(
-        "{} {} {:?} {:?} {:?}",
-        m.version,
-        m.generation,
-        m.layers,
-        sorted(&m.label_layers),
-        sorted(&m.key_layers)
+        "{} {:?} {:?} {:?}",
+        s.version,
+        s.layers,
+        sorted(&s.label_layers),
+        sorted(&s.key_layers)
     )
 }
 

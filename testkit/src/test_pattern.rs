@@ -52,7 +52,10 @@ pub fn check(bytes: &[u8], entry: ManifestEntry) -> Result<(), String> {
     id.copy_from_slice(&bytes[4..8]);
     let mut generation = [0; 8];
     generation.copy_from_slice(&bytes[8..16]);
-    let (id, generation) = (u64::from(u32::from_le_bytes(id)), u64::from_le_bytes(generation));
+    let (id, generation) = (
+        u64::from(u32::from_le_bytes(id)),
+        u64::from_le_bytes(generation),
+    );
     // Truncation intended: the head holds the id's low 32 bits.
     if (id, generation) != (u64::from(entry.layer_id as u32), entry.generation) {
         return Err(format!(

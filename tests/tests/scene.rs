@@ -10,7 +10,7 @@ use rustix::process::Signal;
 use ygg_dsg::layout;
 use ygg_reader::{SceneReader, SceneReceiveError, SceneSnapshot};
 use ygg_store::query::{self, nodes_with_label};
-use ygg_store::snapshot::{is_chunk_segment_id, part_segment_id};
+use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, is_chunk_segment_id, part_segment_id};
 use ygg_store::{LayerId, NodeId, SceneGraph, SceneView, Scope};
 use ygg_testkit::{Proc, TestScene, Watchdog, catches_signal, wait_until};
 use ygg_transport::PublisherBuilder;
@@ -211,16 +211,25 @@ fn publish_segment(
         .expect("publish layer");
 }
 
-/// Publishes `g`'s manifest at `generation`, changed by `tamper` first.
+/// Publishes `g`'s structure (generation 1) and its manifest at `generation`, changed by
+/// `tamper` first.
 fn publish_cut(
     publisher: &mut ygg_transport::SegmentPublisher,
     g: &SceneGraph,
     generation: u64,
     tamper: impl FnOnce(&mut ygg_store::snapshot::Manifest),
 ) {
-    let mut manifest = g.manifest(generation);
+    let structure = g.structure(1);
+    if publisher.layer_generation(STRUCTURE_SEGMENT_ID) != Some(1) {
+        publisher
+            .publish_layer(STRUCTURE_SEGMENT_ID, 1, structure.archived_len(), |buf| {
+                structure.archive_into(buf).expect("fits");
+            })
+            .expect("publish structure");
+    }
+    let mut manifest = g.manifest(generation, 1);
     tamper(&mut manifest);
-    let entries: Vec<_> = manifest
+    let mut entries: Vec<_> = manifest
         .layers
         .iter()
         .map(|e| ygg_transport::ManifestEntry {
@@ -228,6 +237,10 @@ fn publish_cut(
             generation: e.generation,
         })
         .collect();
+    entries.push(ygg_transport::ManifestEntry {
+        layer_id: STRUCTURE_SEGMENT_ID,
+        generation: 1,
+    });
     publisher
         .publish_manifest(generation, &entries, manifest.archived_len(), |buf| {
             manifest.archive_into(buf).expect("fits");

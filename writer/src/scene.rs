@@ -5,7 +5,8 @@ use std::collections::{BTreeSet, HashMap};
 use std::path::PathBuf;
 use std::time::Duration;
 use ygg_store::snapshot::{
-    MAX_LAYER_ID, MAX_PART_ROWS, MAX_POINT_CHUNK_LEN, PART_ROWS, POINT_CHUNK_LEN, SegmentCache,
+    MAX_LAYER_ID, MAX_PART_ROWS, MAX_POINT_CHUNK_LEN, PART_ROWS, POINT_CHUNK_LEN,
+    STRUCTURE_SEGMENT_ID, SegmentCache,
 };
 use ygg_store::{LayerId, SceneGraph, SceneView, SnapshotError, TouchMark};
 use ygg_transport::ManifestEntry;
@@ -28,6 +29,12 @@ pub struct PublishReport {
     pub layers_unchanged: usize,
     /// Bytes archived into shared memory (layer segments, chunks and manifest).
     pub bytes_sent: usize,
+    /// Of `bytes_sent`, the point and tree chunks'.
+    pub chunk_bytes_sent: usize,
+    /// Of `bytes_sent`, the manifest's (store manifest and transport prefix).
+    pub manifest_bytes_sent: usize,
+    /// Segments the cut names (every layer's parts and chunks).
+    pub segments: usize,
 }
 
 /// Owns a live scene graph and publishes it: on [`SceneWriter::publish`] each layer whose
@@ -338,12 +345,44 @@ impl SceneWriter {
             _ => self.cut_entries(),
         };
         let generation = self.generation + 1;
-        let manifest = self.segments.manifest_bytes(
-            &self.graph,
-            generation,
-            incremental.then_some(changed.as_slice()),
-        );
-        let len = manifest.len();
+        let len = self
+            .segments
+            .manifest_bytes(
+                &self.graph,
+                generation,
+                incremental.then_some(changed.as_slice()),
+            )
+            .len();
+        let (cut_structure, structure_bytes) = self.segments.structure().expect("just built");
+        let structure_generation = cut_structure.generation;
+        if self.publisher.layer_generation(STRUCTURE_SEGMENT_ID) != Some(structure_generation) {
+            let structure_len = structure_bytes.len();
+            self.publisher.try_publish_layer(
+                STRUCTURE_SEGMENT_ID,
+                structure_generation,
+                structure_len,
+                |buf| {
+                    buf[..structure_len].copy_from_slice(structure_bytes);
+                    Ok::<(), SnapshotError>(())
+                },
+            )?;
+            report.bytes_sent += structure_len;
+            report.manifest_bytes_sent += structure_len;
+        }
+        let mut entries = entries;
+        match entries.binary_search_by_key(&STRUCTURE_SEGMENT_ID, |e| e.layer_id) {
+            Ok(i) => entries[i].generation = structure_generation,
+            Err(i) => entries.insert(
+                i,
+                ManifestEntry {
+                    layer_id: STRUCTURE_SEGMENT_ID,
+                    generation: structure_generation,
+                },
+            ),
+        }
+        let manifest =
+            self.segments
+                .manifest_bytes(&self.graph, generation, incremental.then_some(&[][..]));
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {
                 buf[..len].copy_from_slice(manifest);
@@ -351,7 +390,10 @@ impl SceneWriter {
             })?;
         self.generation = generation;
         report.generation = generation;
-        report.bytes_sent += len;
+        let manifest_len = len + ygg_transport::protocol::manifest_prefix_len(entries.len());
+        report.bytes_sent += manifest_len;
+        report.manifest_bytes_sent += manifest_len;
+        report.segments = entries.len();
         for layer in &changed {
             let g = self.graph.layer_generation(*layer).expect("listed layer");
             self.published_generation.insert(*layer, g);
@@ -392,7 +434,9 @@ impl SceneWriter {
             })
             .collect();
         entries.sort_unstable_by_key(|e| e.layer_id);
-        let live: BTreeSet<u64> = entries.iter().map(|e| e.layer_id).collect();
+        let mut live: BTreeSet<u64> = entries.iter().map(|e| e.layer_id).collect();
+        // The structure's entry is set by the publish.
+        live.insert(STRUCTURE_SEGMENT_ID);
         for gone in self.published_segments.difference(&live) {
             self.publisher.retire_layer(*gone);
         }
@@ -414,6 +458,7 @@ fn send_chunk(
     publisher.try_publish_layer(id, generation, len, |buf| archive(buf).map(|_| ()))?;
     report.chunks_sent += 1;
     report.bytes_sent += len;
+    report.chunk_bytes_sent += len;
     Ok(())
 }
 

@@ -28,13 +28,12 @@ pub fn agents_segment_bytes(g: &SceneGraph) -> Res<usize> {
         .layers()
         .position(|l| l == agents)
         .ok_or("AGENTS is not among the layers")?;
-    Ok(g.to_segments().1[index].len())
+    Ok(g.to_segments().layers[index].len())
 }
 
 /// Bytes of the whole archived graph (manifest and every layer).
 pub fn archived_bytes(g: &SceneGraph) -> usize {
-    let (manifest, layers) = g.to_segments();
-    manifest.len() + layers.iter().map(|l| l.len()).sum::<usize>()
+    g.to_segments().len()
 }
 
 /// Moves agent poses of the `AGENTS` layer round robin, a few centimetres each time:

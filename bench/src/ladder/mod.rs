@@ -120,8 +120,7 @@ pub fn run(args: &LadderArgs) -> Result<(), Box<dyn std::error::Error>> {
         update_us: f64::NAN,
     }];
     for (l, g) in &mut graphs {
-        let (m, ls) = g.to_segments();
-        let bytes = m.len() + ls.iter().map(|x| x.len()).sum::<usize>();
+        let bytes = g.to_segments().len();
         statics.push(StaticRow {
             target: l.name().into(),
             nodes: g.node_count(),

@@ -91,6 +91,15 @@ const KIND_TREE_CHUNK: u64 = 2;
 /// The manifest's segment id: of no kind a part or chunk has.
 pub const MANIFEST_SEGMENT_ID: u64 = u64::MAX;
 
+/// The structure's segment id ([`Structure`](super::Structure)): of no kind a part or
+/// chunk has, sorted after every chunk.
+pub const STRUCTURE_SEGMENT_ID: u64 = 3 << KIND_SHIFT;
+
+/// Whether a segment id names the structure.
+pub fn is_structure_segment_id(id: u64) -> bool {
+    id == STRUCTURE_SEGMENT_ID
+}
+
 /// Most chunks one part's point column may be split into; a larger column is kept in
 /// one piece.
 pub const MAX_CHUNKS_PER_LAYER: usize = 1 << INDEX_BITS;

@@ -1,8 +1,11 @@
 //! Archived snapshots: the packed, column-oriented rkyv layout, `.ygg` files, and
 //! [`ArchivedScene`], the [`crate::SceneView`] over validated archived bytes.
 //!
-//! A snapshot is one **manifest** segment plus one **layer** segment per layer, and
-//! for a layer of many points its point column in **chunk** segments (`chunk`). A layer
+//! A snapshot is one **manifest** segment (per-cut values: each layer's generation, node
+//! count, id bounds) plus a **structure** segment (layer names, DAG, part lists, term
+//! indexes; resent only when it changes) plus one or more **part** segments per layer
+//! (row chunks over id ranges), and for a part of many points its point column in
+//! **chunk** segments (`chunk`). A layer
 //! segment is a struct of arrays: sorted node ids, points with CSR offsets, parent ids
 //! and the rows ordered by parent (a node's children are found in its layer's DAG
 //! children, on the child's side), out- and in-edges in CSR form (rows within the layer), labels,
@@ -48,22 +51,24 @@ mod schema;
 pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use chunking::{
     MANIFEST_SEGMENT_ID, MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_PART_ROWS, MAX_PARTS_PER_LAYER,
-    MAX_POINT_CHUNK_LEN, PART_ITEM_ROW_BITS, PART_ROWS, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS,
-    WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer, is_chunk_segment_id,
-    is_part_segment_id, is_tree_chunk_segment_id, part_segment_id, segment_layer_part,
-    tree_chunk_segment_id,
+    MAX_POINT_CHUNK_LEN, PART_ITEM_ROW_BITS, PART_ROWS, POINT_CHUNK_LEN, STRUCTURE_SEGMENT_ID,
+    TREE_CHUNK_MIN_POINTS, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer,
+    is_chunk_segment_id, is_part_segment_id, is_structure_segment_id, is_tree_chunk_segment_id,
+    part_segment_id, segment_layer_part, tree_chunk_segment_id,
 };
 pub use publish::{
-    PointChunkSource, PublishedLayer, PublishedParts, SegmentCache, TreeChunkSource,
+    ArchivedGraph, PointChunkSource, PublishedLayer, PublishedParts, SegmentCache, TreeChunkSource,
 };
 pub use read::{
-    ArchivedNodeRef, ArchivedScene, CheckedManifest, FILE_MAGIC, KnownParts, SnapshotFile,
-    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
-    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
+    ArchivedNodeRef, ArchivedScene, FILE_MAGIC, KnownParts, SnapshotFile, check_layer,
+    chunk_unchecked, layer_unchecked, manifest_unchecked, structure_unchecked,
+    tree_chunk_unchecked, validate_chunk, validate_layer, validate_manifest, validate_structure,
+    validate_tree_chunk,
 };
 pub use schema::{
     ArchivedLayerIndexSegment, ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer,
-    ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, ArchivedTreeChunk,
-    ArchivedTreeChunkRef, FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer,
-    NodeIndexSegment, PointChunk, PointChunkRef, TreeChunk, TreeChunkRef,
+    ArchivedNodeIndexSegment, ArchivedPointChunk, ArchivedPointChunkRef, ArchivedStructure,
+    ArchivedStructureLayer, ArchivedTreeChunk, ArchivedTreeChunkRef, FORMAT_VERSION,
+    LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NodeIndexSegment, PointChunk,
+    PointChunkRef, Structure, StructureLayer, TreeChunk, TreeChunkRef,
 };

@@ -202,21 +202,13 @@ pub struct NodeIndexSegment {
     pub tree_chunk: Option<TreeChunkRef>,
 }
 
-/// A layer's entry in the manifest.
+/// A layer's entry in a snapshot's [`Structure`].
 #[derive(Archive, Serialize, Debug, Default, Clone)]
-pub struct ManifestLayer {
+pub struct StructureLayer {
     /// The layer's id.
     pub id: u32,
     /// The layer's name.
     pub name: String,
-    /// The layer's generation in this cut (each part's generation is at most it).
-    pub generation: u64,
-    /// Number of nodes.
-    pub node_count: u64,
-    /// Smallest node id (`u64::MAX` when empty).
-    pub min_id: u64,
-    /// Largest node id (0 when empty).
-    pub max_id: u64,
     /// DAG parents, ascending.
     pub parents: Vec<u32>,
     /// DAG children, ascending.
@@ -226,20 +218,51 @@ pub struct ManifestLayer {
     pub parts: Vec<u32>,
 }
 
-/// The manifest: which layers at which generations form one consistent cut, the layer
-/// DAG, and the graph-level inverted indexes.
+/// What of a snapshot changes only when its structure does: its layers (names, DAG,
+/// parts) and the graph-level inverted indexes. A segment of its own, sent when it
+/// changes; each cut's [`Manifest`] names its generation.
+#[derive(Archive, Serialize, Debug, Default)]
+pub struct Structure {
+    /// [`FORMAT_VERSION`] of the writer.
+    pub version: u32,
+    /// The structure's generation (the [`Manifest::structure`] of the cuts it belongs to).
+    pub generation: u64,
+    /// Layers, ascending by id.
+    pub layers: Vec<StructureLayer>,
+    /// Label -> layers holding it, ascending.
+    pub label_layers: HashMap<String, Vec<u32>>,
+    /// Feature key -> layers holding it, ascending.
+    pub key_layers: HashMap<String, Vec<u32>>,
+}
+
+/// A layer's entry in the manifest: its per-cut values.
+#[derive(Archive, Serialize, Debug, Default, Clone, Copy)]
+pub struct ManifestLayer {
+    /// The layer's id.
+    pub id: u32,
+    /// The layer's generation in this cut (each part's generation is at most it).
+    pub generation: u64,
+    /// Number of nodes.
+    pub node_count: u64,
+    /// Smallest node id (`u64::MAX` when empty).
+    pub min_id: u64,
+    /// Largest node id (0 when empty).
+    pub max_id: u64,
+}
+
+/// The manifest: which layers at which generations form one consistent cut, and which
+/// [`Structure`] they have. Fixed-size entries, one per layer: everything else travels
+/// in the structure, sent only when it changes.
 #[derive(Archive, Serialize, Debug, Default)]
 pub struct Manifest {
     /// [`FORMAT_VERSION`] of the writer.
     pub version: u32,
     /// Generation of the whole cut (increases with every publish).
     pub generation: u64,
-    /// Layers, ascending by id.
+    /// The generation of the cut's [`Structure`].
+    pub structure: u64,
+    /// Layers, ascending by id (the structure's layers, in the same order).
     pub layers: Vec<ManifestLayer>,
-    /// Label -> layers holding it, ascending.
-    pub label_layers: HashMap<String, Vec<u32>>,
-    /// Feature key -> layers holding it, ascending.
-    pub key_layers: HashMap<String, Vec<u32>>,
 }
 
 /// An archived `u32` column as native values.

@@ -4,10 +4,10 @@
 
 use std::collections::BTreeMap;
 use ygg_store::snapshot::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedScene, ArchivedTreeChunk,
-    SegmentBytes, SegmentCache, archive, is_chunk_segment_id, is_part_segment_id,
-    is_tree_chunk_segment_id, validate_chunk, validate_layer, validate_manifest,
-    validate_tree_chunk,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedScene, ArchivedStructure,
+    ArchivedTreeChunk, SegmentBytes, SegmentCache, archive, is_chunk_segment_id,
+    is_part_segment_id, is_tree_chunk_segment_id, validate_chunk, validate_layer,
+    validate_manifest, validate_structure, validate_tree_chunk,
 };
 use ygg_store::{LayerId, SceneGraph, SceneView};
 
@@ -56,9 +56,9 @@ impl Publisher {
         }
     }
 
-    /// Publishes `g` now: the archived manifest and the ids of the segments of the cut,
-    /// ascending (their bytes in `held`).
-    pub fn publish(&mut self, g: &mut SceneGraph) -> (SegmentBytes, Vec<u64>) {
+    /// Publishes `g` now: the archived manifest and structure, and the ids of the
+    /// segments of the cut, ascending (their bytes in `held`).
+    pub fn publish(&mut self, g: &mut SceneGraph) -> (SegmentBytes, SegmentBytes, Vec<u64>) {
         let layers: Vec<LayerId> = g.layers().collect();
         let mut ids = Vec::new();
         for l in layers {
@@ -86,16 +86,25 @@ impl Publisher {
         }
         ids.sort_unstable();
         self.held.retain(|id, _| ids.binary_search(id).is_ok());
-        (archive(self.segments.manifest(g, 1)), ids)
+        let manifest = archive(self.segments.manifest(g, 1));
+        let (structure, _) = self.segments.structure().expect("built with the manifest");
+        (manifest, archive(structure), ids)
     }
 }
 
 impl Publisher {
-    /// The held segments of a cut (`ids`, ascending) and its `manifest`, validated.
-    pub fn validated<'a>(&'a self, manifest: &'a [u8], ids: &[u64]) -> Validated<'a> {
+    /// The held segments of a cut (`ids`, ascending), its `manifest` and `structure`,
+    /// validated.
+    pub fn validated<'a>(
+        &'a self,
+        manifest: &'a [u8],
+        structure: &'a [u8],
+        ids: &[u64],
+    ) -> Validated<'a> {
         let held = |id: &u64| &self.held[id].1;
         Validated {
             manifest: validate_manifest(manifest, "manifest").unwrap(),
+            structure: validate_structure(structure, "structure").unwrap(),
             parts: ids
                 .iter()
                 .filter(|id| is_part_segment_id(**id))
@@ -118,6 +127,7 @@ impl Publisher {
 /// The validated segments of one published cut.
 pub struct Validated<'a> {
     manifest: &'a ArchivedManifest,
+    structure: &'a ArchivedStructure,
     parts: Vec<&'a ArchivedLayerSegment>,
     chunks: Vec<&'a ArchivedPointChunk>,
     trees: Vec<&'a ArchivedTreeChunk>,
@@ -128,6 +138,7 @@ impl<'a> Validated<'a> {
     pub fn join(&self) -> Result<ArchivedScene<'a>, String> {
         ArchivedScene::new(
             self.manifest,
+            self.structure,
             self.parts.clone(),
             self.chunks.clone(),
             self.trees.clone(),

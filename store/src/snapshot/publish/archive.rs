@@ -1,5 +1,5 @@
 //! Archiving the live graph: [`SceneGraph::layer_segment`], [`SceneGraph::manifest`],
-//! [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
+//! [`SceneGraph::structure`], [`SceneGraph::to_segments`], the snapshot copies of its spatial indexes, and
 //! archiving straight into a loaned buffer (`archived_len`, `archive_into`).
 
 use super::chunk_source::{PointChunkSource, TreeChunkSource};
@@ -8,7 +8,7 @@ use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR, Stor
 use crate::index::{ArchivedKdTree, build_tree};
 use crate::snapshot::schema::{
     FORMAT_VERSION, LayerIndexSegment, LayerSegment, Manifest, ManifestLayer, NO_PARENT,
-    NodeIndexSegment, PointChunk, TreeChunk,
+    NodeIndexSegment, PointChunk, Structure, StructureLayer, TreeChunk,
 };
 use crate::{LayerId, Node, NodeId, Point, SceneGraph, SnapshotError};
 use rkyv::Serialize;
@@ -224,8 +224,9 @@ impl SceneGraph {
         }
     }
 
-    /// Builds the manifest of the current graph (every layer at its current generation).
-    pub fn manifest(&self, generation: u64) -> Manifest {
+    /// Builds the structure of the current graph at generation `generation` (each layer
+    /// in one part).
+    pub fn structure(&self, generation: u64) -> Structure {
         let layers = self
             .layers
             .iter()
@@ -234,14 +235,9 @@ impl SceneGraph {
                 let mut children: Vec<u32> = l.children.iter().map(|c| c.0).collect();
                 parents.sort_unstable();
                 children.sort_unstable();
-                let (min_id, max_id) = l.id_bounds();
-                ManifestLayer {
+                StructureLayer {
                     id: id.0,
                     name: l.name.clone(),
-                    generation: l.generation,
-                    node_count: l.nodes.len() as u64,
-                    min_id,
-                    max_id,
                     parents,
                     children,
                     parts: vec![0],
@@ -257,7 +253,7 @@ impl SceneGraph {
                 })
                 .collect()
         };
-        Manifest {
+        Structure {
             version: FORMAT_VERSION,
             generation,
             layers,
@@ -266,15 +262,68 @@ impl SceneGraph {
         }
     }
 
-    /// Archives the whole graph: the manifest and every layer segment.
-    pub fn to_segments(&self) -> (SegmentBytes, Vec<SegmentBytes>) {
-        let manifest = archive(&self.manifest(self.structure_generation));
+    /// Builds the manifest of the current graph (every layer at its current generation),
+    /// of cut `generation` with the structure of generation `structure`.
+    pub fn manifest(&self, generation: u64, structure: u64) -> Manifest {
         let layers = self
             .layers
-            .keys()
-            .map(|&l| archive(&self.layer_segment(l)))
+            .iter()
+            .map(|(&id, l)| {
+                let (min_id, max_id) = l.id_bounds();
+                ManifestLayer {
+                    id: id.0,
+                    generation: l.generation,
+                    node_count: l.nodes.len() as u64,
+                    min_id,
+                    max_id,
+                }
+            })
             .collect();
-        (manifest, layers)
+        Manifest {
+            version: FORMAT_VERSION,
+            generation,
+            structure,
+            layers,
+        }
+    }
+
+    /// Archives the whole graph, each layer in one part (structure and cut of generation
+    /// 1).
+    pub fn to_segments(&self) -> ArchivedGraph {
+        ArchivedGraph {
+            manifest: archive(&self.manifest(1, 1)),
+            structure: archive(&self.structure(1)),
+            layers: self
+                .layers
+                .keys()
+                .map(|&l| archive(&self.layer_segment(l)))
+                .collect(),
+        }
+    }
+}
+
+/// A whole graph archived ([`SceneGraph::to_segments`]).
+#[derive(Debug)]
+pub struct ArchivedGraph {
+    /// The manifest.
+    pub manifest: SegmentBytes,
+    /// The structure.
+    pub structure: SegmentBytes,
+    /// Each layer's segment (one part each), ascending by layer id.
+    pub layers: Vec<SegmentBytes>,
+}
+
+impl ArchivedGraph {
+    /// Bytes of every segment together.
+    pub fn len(&self) -> usize {
+        self.manifest.len()
+            + self.structure.len()
+            + self.layers.iter().map(|l| l.len()).sum::<usize>()
+    }
+
+    /// Whether no segment holds a byte (never: a manifest always does).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
 }
 
@@ -350,6 +399,7 @@ macro_rules! in_place_archiving {
 
 in_place_archiving!(LayerSegment);
 in_place_archiving!(Manifest);
+in_place_archiving!(Structure);
 in_place_archiving!(PointChunk);
 in_place_archiving!(PointChunkSource<'_>);
 in_place_archiving!(TreeChunk);

@@ -9,6 +9,7 @@ mod layer_index_update;
 mod parts;
 mod segment_cache;
 
+pub use archive::ArchivedGraph;
 pub use chunk_source::{PointChunkSource, TreeChunkSource};
 pub use chunk_state::PublishedLayer;
 pub use parts::PublishedParts;

@@ -32,7 +32,8 @@ use crate::graph::Layer;
 use crate::graph::LayerChanges;
 use crate::snapshot::chunking::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use crate::snapshot::schema::{
-    ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT, cut_field_offsets,
+    ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT, Structure,
+    cut_field_offsets,
 };
 use crate::{LayerId, NodeId, SceneGraph};
 use rustc_hash::FxHashMap;
@@ -72,8 +73,10 @@ pub struct SegmentCache {
     /// Segments of every layer in published form beyond one per layer: further parts,
     /// point and tree chunks.
     extra_segments: usize,
-    /// Bumped whenever a layer's list of parts changes (the manifest lists them).
+    /// Bumped whenever a layer's list of parts changes (the structure lists them).
     parts_generation: u64,
+    /// Structures built so far: the generation of the newest.
+    structures: u64,
 }
 
 impl std::fmt::Debug for SegmentCache {
@@ -96,6 +99,9 @@ struct CachedManifest {
     /// fixed-size fields change between structure or terms changes, so they are
     /// patched in place rather than archived again.
     archived: Option<ManifestBytes>,
+    /// The structure the manifest names, and its archive.
+    structure: Structure,
+    structure_bytes: SegmentBytes,
 }
 
 /// An archived manifest and where its per-publish fields lie in its bytes.
@@ -189,6 +195,7 @@ impl Default for SegmentCache {
             manifest: None,
             extra_segments: 0,
             parts_generation: 0,
+            structures: 0,
         }
     }
 }
@@ -366,6 +373,16 @@ impl SegmentCache {
         &archived.bytes
     }
 
+    /// The structure the last manifest ([`SegmentCache::manifest`],
+    /// [`SegmentCache::manifest_bytes`]) names, and its archive: a segment of its own,
+    /// built again (with a new generation) only when the graph's structure, its terms or
+    /// a layer's parts changed.
+    pub fn structure(&self) -> Option<(&Structure, &[u8])> {
+        self.manifest
+            .as_ref()
+            .map(|c| (&c.structure, &c.structure_bytes[..]))
+    }
+
     fn update_manifest(
         &mut self,
         graph: &SceneGraph,
@@ -416,14 +433,19 @@ impl SegmentCache {
                     }
                     kept
                 });
-                let mut manifest = graph.manifest(generation);
-                for entry in &mut manifest.layers {
+                self.structures += 1;
+                let mut structure = graph.structure(self.structures);
+                for entry in &mut structure.layers {
                     if let Some(p) = self.layers.get(&LayerId(entry.id)) {
                         entry.parts = p.numbers();
-                        if let Some(bounds) = p.current_id_bounds(&graph.layers[&LayerId(entry.id)])
-                        {
-                            (entry.min_id, entry.max_id) = bounds;
-                        }
+                    }
+                }
+                let mut manifest = graph.manifest(generation, self.structures);
+                for entry in &mut manifest.layers {
+                    if let Some(p) = self.layers.get(&LayerId(entry.id))
+                        && let Some(bounds) = p.current_id_bounds(&graph.layers[&LayerId(entry.id)])
+                    {
+                        (entry.min_id, entry.max_id) = bounds;
                     }
                 }
                 CachedManifest {
@@ -432,6 +454,8 @@ impl SegmentCache {
                     parts_generation: key.2,
                     manifest,
                     archived: None,
+                    structure_bytes: archive(&structure),
+                    structure,
                 }
             }
         };

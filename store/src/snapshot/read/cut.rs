@@ -8,7 +8,7 @@ use super::validate::{LayerPositions, check_dag};
 use crate::snapshot::chunking::PART_ITEM_ROW_BITS;
 use crate::snapshot::schema::{
     ArchivedLayerSegment, ArchivedManifest, ArchivedManifestLayer, ArchivedPointChunk,
-    ArchivedTreeChunk, ArchivedTreeChunkRef, u32s, u64s,
+    ArchivedStructure, ArchivedStructureLayer, ArchivedTreeChunk, ArchivedTreeChunkRef, u32s, u64s,
 };
 use crate::{LayerId, Point};
 use rkyv::collections::swiss_table::ArchivedHashMap;
@@ -22,6 +22,9 @@ pub(super) type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend:
 /// `.ygg` file or from shared memory.
 pub struct ArchivedScene<'a> {
     pub(super) manifest: &'a ArchivedManifest,
+    /// The cut's structure (layer names, DAG, part lists, term indexes), whose layers are
+    /// the manifest's at the same positions.
+    pub(super) structure: &'a ArchivedStructure,
     /// Part segments in manifest order: each layer's parts in the order its entry lists
     /// them (ascending ids). A layer in one piece has one part.
     pub(super) parts: Vec<&'a ArchivedLayerSegment>,
@@ -41,12 +44,12 @@ pub struct ArchivedScene<'a> {
     pub(super) index_trees: Vec<&'a ArchivedTreeChunk>,
 }
 
-/// Checks what a manifest's bytecheck does not and depends on nothing but its structure:
-/// layer ids ascending, DAG edges and term lists naming listed layers, the DAG itself.
-fn check_structure(manifest: &ArchivedManifest) -> Result<(), String> {
+/// Checks what a structure's bytecheck does not: layer ids ascending, DAG edges and term
+/// lists naming listed layers, the DAG itself, part lists not empty and without repeats.
+fn check_structure(manifest: &ArchivedStructure) -> Result<(), String> {
     let ids = manifest.layers.iter().map(|m| m.id.to_native());
     if ids.clone().zip(ids.skip(1)).any(|(a, b)| a >= b) {
-        return Err("manifest layers are not ascending".into());
+        return Err("structure layers are not ascending".into());
     }
     // Ascending (checked above): each id is found in a table or by binary search.
     let positions = LayerPositions::new(manifest);
@@ -76,6 +79,33 @@ fn check_structure(manifest: &ArchivedManifest) -> Result<(), String> {
         if !known(ls) {
             return Err("graph index names an unknown layer".into());
         }
+    }
+    Ok(())
+}
+
+/// Checks that a manifest names the layers of `structure`, of its generation.
+fn check_manifest_matches(
+    manifest: &ArchivedManifest,
+    structure: &ArchivedStructure,
+) -> Result<(), String> {
+    if manifest.structure != structure.generation {
+        return Err(format!(
+            "manifest names structure {}, structure {} given",
+            manifest.structure, structure.generation
+        ));
+    }
+    if manifest.layers.len() != structure.layers.len()
+        || manifest
+            .layers
+            .iter()
+            .zip(structure.layers.iter())
+            .any(|(m, s)| m.id != s.id)
+    {
+        return Err(format!(
+            "manifest lists {} layers, not the {} of its structure",
+            manifest.layers.len(),
+            structure.layers.len()
+        ));
     }
     Ok(())
 }
@@ -127,11 +157,12 @@ impl<'a> ArchivedScene<'a> {
     /// A description of the first mismatch.
     pub fn new(
         manifest: &'a ArchivedManifest,
+        structure: &'a ArchivedStructure,
         parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Result<Self, String> {
-        Self::rejoin(manifest, parts, chunks, trees, KnownParts::NONE)
+        Self::rejoin(manifest, structure, parts, chunks, trees, KnownParts::NONE)
     }
 
     /// [`ArchivedScene::new`] for a reader's next cut: checks what `known` does not say
@@ -143,22 +174,24 @@ impl<'a> ArchivedScene<'a> {
     /// A description of the first mismatch.
     pub fn rejoin(
         manifest: &'a ArchivedManifest,
+        structure: &'a ArchivedStructure,
         parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
         known: KnownParts<'_>,
     ) -> Result<Self, String> {
         if !known.structure {
-            check_structure(manifest)?;
+            check_structure(structure)?;
         }
-        let listed: usize = manifest.layers.iter().map(|m| m.parts.len()).sum();
+        check_manifest_matches(manifest, structure)?;
+        let listed: usize = structure.layers.iter().map(|m| m.parts.len()).sum();
         if listed != parts.len() {
             return Err(format!(
                 "manifest lists {listed} parts, {} segments given",
                 parts.len()
             ));
         }
-        let (scene, problem) = Self::assemble(manifest, &parts, chunks, trees);
+        let (scene, problem) = Self::assemble(manifest, structure, &parts, chunks, trees);
         if let Some(problem) = problem {
             return Err(problem);
         }
@@ -178,7 +211,7 @@ impl<'a> ArchivedScene<'a> {
                     .count();
             }
             if !known.layer(i) {
-                scene.check_layer_parts(m, range)?;
+                scene.check_layer_parts(m, &structure.layers[i], range)?;
             }
         }
         if point_chunks != scene.chunks.len() {
@@ -204,6 +237,7 @@ impl<'a> ArchivedScene<'a> {
     fn check_layer_parts(
         &self,
         m: &ArchivedManifestLayer,
+        s: &ArchivedStructureLayer,
         range: std::ops::Range<usize>,
     ) -> Result<(), String> {
         let layer = m.id.to_native();
@@ -214,7 +248,7 @@ impl<'a> ArchivedScene<'a> {
             return Err(format!("layer {layer} has {} parts", range.len()));
         }
         for (k, &p) in self.parts[range.clone()].iter().enumerate() {
-            let number = m.parts[k].to_native();
+            let number = s.parts[k].to_native();
             if p.layer != layer || p.part != number || p.generation > m.generation {
                 return Err(format!(
                     "manifest entry of layer {layer} (generation {}) names part {number}, segment is layer {} part {} generation {}",
@@ -296,11 +330,12 @@ impl<'a> ArchivedScene<'a> {
     /// but stay memory-safe.
     pub fn new_prechecked(
         manifest: &'a ArchivedManifest,
+        structure: &'a ArchivedStructure,
         parts: Vec<&'a ArchivedLayerSegment>,
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
     ) -> Self {
-        Self::assemble(manifest, &parts, chunks, trees).0
+        Self::assemble(manifest, structure, &parts, chunks, trees).0
     }
 
     /// The cut's parts put in manifest order (found by (layer, part number) in `given`,
@@ -309,6 +344,7 @@ impl<'a> ArchivedScene<'a> {
     /// key.
     fn assemble(
         manifest: &'a ArchivedManifest,
+        structure: &'a ArchivedStructure,
         given: &[&'a ArchivedLayerSegment],
         chunks: Vec<&'a ArchivedPointChunk>,
         trees: Vec<&'a ArchivedTreeChunk>,
@@ -323,8 +359,8 @@ impl<'a> ArchivedScene<'a> {
             .or_else(|| unordered("point chunks", &chunks, chunk_key))
             .or_else(|| unordered("tree chunks", &trees, tree_key));
         let mut parts = Vec::with_capacity(given.len());
-        let mut part_start = Vec::with_capacity(manifest.layers.len() + 1);
-        for m in manifest.layers.iter() {
+        let mut part_start = Vec::with_capacity(structure.layers.len() + 1);
+        for m in structure.layers.iter() {
             part_start.push(parts.len() as u32);
             let layer = m.id.to_native();
             for number in u32s(&m.parts) {
@@ -353,6 +389,7 @@ impl<'a> ArchivedScene<'a> {
         };
         let scene = ArchivedScene {
             manifest,
+            structure,
             parts,
             part_start,
             chunk_points: chunks.iter().map(|c| chunk_points(c)).collect(),

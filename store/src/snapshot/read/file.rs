@@ -7,9 +7,11 @@
 )]
 
 use super::cut::ArchivedScene;
-use super::validate::{validate_layer, validate_manifest};
+use super::validate::{validate_layer, validate_manifest, validate_structure};
 use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes};
-use crate::snapshot::schema::{ArchivedLayerSegment, ArchivedManifest, FORMAT_VERSION};
+use crate::snapshot::schema::{
+    ArchivedLayerSegment, ArchivedManifest, ArchivedStructure, FORMAT_VERSION,
+};
 use crate::{SceneGraph, SnapshotError};
 use std::path::Path;
 
@@ -21,7 +23,8 @@ fn align_up(n: usize) -> usize {
 }
 
 /// Lays segments out as a `.ygg` file: magic, version, count, `(offset, len)` table,
-/// then each segment at a 128-aligned offset. The first segment is the manifest.
+/// then each segment at a 128-aligned offset. The first segment is the manifest, the
+/// second the structure, then one segment per layer.
 fn pack_file(segments: &[&[u8]]) -> Vec<u8> {
     let header = 16 + 16 * segments.len();
     let mut out = Vec::with_capacity(
@@ -113,6 +116,7 @@ fn unpack_file(bytes: &[u8], what: &str) -> Result<Vec<std::ops::Range<usize>>, 
 pub struct SnapshotFile {
     bytes: Backing,
     manifest: std::ops::Range<usize>,
+    structure: std::ops::Range<usize>,
     layers: Vec<std::ops::Range<usize>>,
 }
 
@@ -169,8 +173,19 @@ impl SnapshotFile {
     fn from_backing(bytes: Backing, what: &str) -> Result<Self, SnapshotError> {
         let data = bytes.as_slice();
         let mut ranges = unpack_file(data, what)?;
+        if ranges.len() < 2 {
+            return Err(SnapshotError::Layout {
+                what: what.to_owned(),
+                reason: "no structure segment after the manifest".into(),
+            });
+        }
         let manifest_range = ranges.remove(0);
+        let structure_range = ranges.remove(0);
         let manifest = validate_manifest(&data[manifest_range.clone()], what)?;
+        let structure = validate_structure(
+            &data[structure_range.clone()],
+            &format!("{what}: structure"),
+        )?;
         let mut layers = Vec::with_capacity(ranges.len());
         for (i, r) in ranges.iter().enumerate() {
             layers.push(validate_layer(
@@ -179,15 +194,16 @@ impl SnapshotFile {
             )?);
         }
         // Files keep every layer's points inline: a file holds no chunk segments.
-        ArchivedScene::new(manifest, layers, Vec::new(), Vec::new()).map_err(|reason| {
-            SnapshotError::Inconsistent {
+        ArchivedScene::new(manifest, structure, layers, Vec::new(), Vec::new()).map_err(
+            |reason| SnapshotError::Inconsistent {
                 what: what.to_owned(),
                 reason,
-            }
-        })?;
+            },
+        )?;
         Ok(SnapshotFile {
             bytes,
             manifest: manifest_range,
+            structure: structure_range,
             layers: ranges,
         })
     }
@@ -200,6 +216,9 @@ impl SnapshotFile {
         // backing bytes are immutable for the life of `self`.
         let manifest =
             unsafe { rkyv::access_unchecked::<ArchivedManifest>(&data[self.manifest.clone()]) };
+        // SAFETY: as above, this range was validated as an `ArchivedStructure`.
+        let structure =
+            unsafe { rkyv::access_unchecked::<ArchivedStructure>(&data[self.structure.clone()]) };
         let layers = self
             .layers
             .iter()
@@ -207,7 +226,7 @@ impl SnapshotFile {
             .map(|r| unsafe { rkyv::access_unchecked::<ArchivedLayerSegment>(&data[r.clone()]) })
             .collect();
         // `from_backing` ran `ArchivedScene::new` on this cut.
-        ArchivedScene::new_prechecked(manifest, layers, Vec::new(), Vec::new())
+        ArchivedScene::new_prechecked(manifest, structure, layers, Vec::new(), Vec::new())
     }
 
     /// Size of the file in bytes.
@@ -220,11 +239,12 @@ impl SnapshotFile {
         self.len() == 0
     }
 
-    /// Bytes of each segment: the manifest's, then every layer segment's in manifest
-    /// order (ascending layer id, as [`crate::SceneView::layers`] lists them).
+    /// Bytes of each segment: the manifest's and the structure's together, then every
+    /// layer segment's in manifest order (ascending layer id, as
+    /// [`crate::SceneView::layers`] lists them).
     pub fn segment_sizes(&self) -> (usize, Vec<usize>) {
         (
-            self.manifest.len(),
+            self.manifest.len() + self.structure.len(),
             self.layers.iter().map(|r| r.len()).collect(),
         )
     }
@@ -257,9 +277,9 @@ impl SceneGraph {
 
     /// The bytes of the graph's `.ygg` file.
     fn to_file_bytes(&self) -> Vec<u8> {
-        let (manifest, layers) = self.to_segments();
-        let mut segments: Vec<&[u8]> = vec![&manifest];
-        segments.extend(layers.iter().map(|l| l.as_slice()));
+        let archived = self.to_segments();
+        let mut segments: Vec<&[u8]> = vec![&archived.manifest, &archived.structure];
+        segments.extend(archived.layers.iter().map(|l| l.as_slice()));
         pack_file(&segments)
     }
 }

@@ -10,8 +10,9 @@ mod validate;
 
 pub use cut::{ArchivedNodeRef, ArchivedScene};
 pub use file::{FILE_MAGIC, SnapshotFile};
-pub use rejoin::{CheckedManifest, KnownParts};
+pub use rejoin::KnownParts;
 pub use validate::{
-    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, tree_chunk_unchecked,
-    validate_chunk, validate_layer, validate_manifest, validate_tree_chunk,
+    check_layer, chunk_unchecked, layer_unchecked, manifest_unchecked, structure_unchecked,
+    tree_chunk_unchecked, validate_chunk, validate_layer, validate_manifest, validate_structure,
+    validate_tree_chunk,
 };

@@ -200,11 +200,11 @@ impl SceneView for ArchivedScene<'_> {
 
     fn layer_name(&self, layer: LayerId) -> Option<&str> {
         self.segment(layer)
-            .map(|(i, _)| self.manifest.layers[i].name.as_str())
+            .map(|(i, _)| self.structure.layers[i].name.as_str())
     }
 
     fn layer_by_name(&self, name: &str) -> Option<LayerId> {
-        self.manifest
+        self.structure
             .layers
             .iter()
             .find(|m| m.name == name)
@@ -214,7 +214,7 @@ impl SceneView for ArchivedScene<'_> {
     fn layer_children(&self, layer: LayerId) -> Vec<LayerId> {
         self.segment(layer)
             .map(|(i, _)| {
-                u32s(&self.manifest.layers[i].children)
+                u32s(&self.structure.layers[i].children)
                     .iter()
                     .map(|&l| LayerId(l))
                     .collect()
@@ -225,7 +225,7 @@ impl SceneView for ArchivedScene<'_> {
     fn layer_parents(&self, layer: LayerId) -> Vec<LayerId> {
         self.segment(layer)
             .map(|(i, _)| {
-                u32s(&self.manifest.layers[i].parents)
+                u32s(&self.structure.layers[i].parents)
                     .iter()
                     .map(|&l| LayerId(l))
                     .collect()
@@ -302,7 +302,7 @@ impl SceneView for ArchivedScene<'_> {
         let mut run: Option<(&[u64], &[u32])> = None;
         let mut merged = Vec::new();
         let layer = self.layer_position(n.part);
-        for &child_layer in u32s(&self.manifest.layers[layer].children) {
+        for &child_layer in u32s(&self.structure.layers[layer].children) {
             let Some((_, parts)) = self.segment(LayerId(child_layer)) else {
                 continue;
             };
@@ -399,11 +399,11 @@ impl SceneView for ArchivedScene<'_> {
     }
 
     fn layers_with_label(&self, label: &str) -> impl Iterator<Item = LayerId> {
-        Self::graph_layers(&self.manifest.label_layers, label)
+        Self::graph_layers(&self.structure.label_layers, label)
     }
 
     fn layers_with_key(&self, key: &str) -> impl Iterator<Item = LayerId> {
-        Self::graph_layers(&self.manifest.key_layers, key)
+        Self::graph_layers(&self.structure.key_layers, key)
     }
 
     fn nodes_with_label(

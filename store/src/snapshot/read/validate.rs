@@ -13,8 +13,8 @@ use crate::feature::{FEATURE_BOOL, FEATURE_FLOAT, FEATURE_INT, FEATURE_STR};
 use crate::index::check_tree;
 use crate::snapshot::chunking::MAX_POINT_CHUNK_LEN;
 use crate::snapshot::schema::{
-    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedTreeChunk, FORMAT_VERSION,
-    NO_PARENT, u32s, u64s,
+    ArchivedLayerSegment, ArchivedManifest, ArchivedPointChunk, ArchivedStructure,
+    ArchivedTreeChunk, FORMAT_VERSION, NO_PARENT, u32s, u64s,
 };
 
 fn validation(what: &str, e: impl std::fmt::Display) -> SnapshotError {
@@ -59,6 +59,18 @@ pub fn validate_manifest<'a>(
 ) -> Result<&'a ArchivedManifest, SnapshotError> {
     let m = access_versioned(bytes, what, |m: &ArchivedManifest| m.version.to_native())?;
     Ok(m)
+}
+
+/// Validates structure bytes (bytecheck, version) and returns the archived structure;
+/// its consistency (ascending ids, DAG, part lists) is checked when a cut is joined.
+///
+/// # Errors
+/// Misaligned bytes, bytecheck failure, or a foreign version.
+pub fn validate_structure<'a>(
+    bytes: &'a [u8],
+    what: &str,
+) -> Result<&'a ArchivedStructure, SnapshotError> {
+    access_versioned(bytes, what, |m: &ArchivedStructure| m.version.to_native())
 }
 
 /// Validates layer-segment bytes (bytecheck, version, [`check_layer`]).
@@ -357,13 +369,13 @@ fn check_spatial_indexes(l: &ArchivedLayerSegment, ids: &[u64]) -> Result<(), St
     Ok(())
 }
 
-/// Where each layer of a manifest (ascending by id, as the caller checked) is, by id: a
+/// Where each layer of a structure (ascending by id, as the caller checked) is, by id: a
 /// table indexed by `id - first id` when the ids are dense enough (at most
 /// [`DENSE_SPAN_PER_LAYER`] ids per layer), else a binary search. Checking a cut looks up
 /// every DAG edge and graph-index entry, so a scene of hundreds of layers is checked in
 /// O(edges) per snapshot, not O(layers²).
 pub(super) struct LayerPositions<'a> {
-    manifest: &'a ArchivedManifest,
+    manifest: &'a ArchivedStructure,
     first: u32,
     /// Position of id `first + k` at `k`, `u32::MAX` for none; empty when ids are sparse.
     dense: Vec<u32>,
@@ -375,7 +387,7 @@ const DENSE_SPAN_PER_LAYER: usize = 16;
 
 impl<'a> LayerPositions<'a> {
     /// The positions of `manifest`'s layers, whose ids are ascending.
-    pub(super) fn new(manifest: &'a ArchivedManifest) -> Self {
+    pub(super) fn new(manifest: &'a ArchivedStructure) -> Self {
         let layers = &manifest.layers;
         let (first, dense) = match (layers.first(), layers.last()) {
             (Some(a), Some(b)) => {
@@ -419,10 +431,10 @@ impl<'a> LayerPositions<'a> {
     }
 }
 
-/// Checks the manifest's layer DAG: unique names, mirrored edges, no cycle. Edges are
+/// Checks the structure's layer DAG: unique names, mirrored edges, no cycle. Edges are
 /// known to name listed layers, and layers are known to be ascending by id.
 pub(super) fn check_dag(
-    manifest: &ArchivedManifest,
+    manifest: &ArchivedStructure,
     positions: &LayerPositions<'_>,
 ) -> Result<(), String> {
     let mut names =
@@ -502,16 +514,24 @@ pub unsafe fn tree_chunk_unchecked(bytes: &[u8]) -> &ArchivedTreeChunk {
     unsafe { rkyv::access_unchecked::<ArchivedTreeChunk>(bytes) }
 }
 
-/// Re-derives a manifest from bytes that [`validate_manifest`] (or
-/// [`CheckedManifest::same_structure`](super::CheckedManifest::same_structure)) accepted
-/// before.
+/// Re-derives a manifest from bytes that [`validate_manifest`] accepted before.
 ///
 /// # Safety
 /// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
-/// an earlier call of [`validate_manifest`] or of `same_structure` accepted.
+/// an earlier call of [`validate_manifest`] accepted.
 pub unsafe fn manifest_unchecked(bytes: &[u8]) -> &ArchivedManifest {
-    // SAFETY: the caller guarantees that `validate_manifest` or `same_structure` (which
-    // finds them equal to validated bytes but for integer fields) accepted these very
-    // bytes and that they have not changed since.
+    // SAFETY: the caller guarantees that `validate_manifest` accepted these very bytes
+    // and that they have not changed since.
     unsafe { rkyv::access_unchecked::<ArchivedManifest>(bytes) }
+}
+
+/// Re-derives a structure from bytes that [`validate_structure`] accepted before.
+///
+/// # Safety
+/// `bytes` must be exactly the bytes (same address, same length, unchanged since) that
+/// an earlier call of [`validate_structure`] accepted.
+pub unsafe fn structure_unchecked(bytes: &[u8]) -> &ArchivedStructure {
+    // SAFETY: the caller guarantees that `validate_structure` accepted these very bytes
+    // and that they have not changed since.
+    unsafe { rkyv::access_unchecked::<ArchivedStructure>(bytes) }
 }
