@@ -20,8 +20,8 @@ mod commands;
 pub(crate) mod error;
 pub(crate) mod interrupt;
 mod reader;
-mod report;
-mod scenes;
+pub(crate) mod report;
+pub(crate) mod scenes;
 mod socket;
 
 pub use args::IpcArgs;
