@@ -20,6 +20,7 @@ mod procfs;
 mod report;
 mod spans;
 
+use crate::ipc::error::run_or_exit;
 use args::Config;
 pub use args::MissionArgs;
 
@@ -28,23 +29,16 @@ pub use args::MissionArgs;
 /// Errors are printed here, after every child was stopped and every shared-memory file
 /// removed, and end the process with status 1.
 pub fn run(args: &MissionArgs) -> Result<(), Box<dyn std::error::Error>> {
-    // iceoryx2 warns on stderr that it found no config file; errors only, unless
-    // IOX2_LOG_LEVEL says otherwise.
-    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
-    let result = Config::new(args)
-        .map_err(Into::into)
-        .and_then(|cfg| match args.leaf {
+    let who = match args.leaf {
+        true => "ygg-bench mission --leaf",
+        false => "ygg-bench mission",
+    };
+    run_or_exit(who, || {
+        let cfg = Config::new(args)?;
+        match args.leaf {
             true => leaf::main(&cfg),
             false => paired::run(args, &cfg),
-        });
-    if let Err(e) = result {
-        let who = if args.leaf {
-            "ygg-bench mission --leaf"
-        } else {
-            "ygg-bench mission"
-        };
-        eprintln!("{who}: error: {e}");
-        std::process::exit(1);
-    }
+        }
+    });
     Ok(())
 }

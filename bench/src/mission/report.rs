@@ -437,8 +437,10 @@ impl Report {
                 .iter()
                 .flat_map(|(_, _, p)| p.iter().map(|(_, y)| *y))
                 .fold((f64::MAX, 0f64), |(a, b), y| (a.min(y), b.max(y)));
+            // A log axis labels its powers of ten only: a narrow range is widened to hold one.
+            let pad = if hi < 10.0 * lo { 3.2 } else { 1.5 };
             let (lo, hi) = if hi > 0.0 {
-                (lo / 1.5, hi * 1.5)
+                (lo / pad, hi * pad)
             } else {
                 (0.1, 10.0)
             };
