@@ -5,6 +5,7 @@ mod dsg_io;
 mod hydra;
 mod ipc;
 mod ladder;
+mod mission;
 mod remote;
 
 use clap::{Parser, Subcommand};
@@ -25,6 +26,10 @@ enum Command {
     Ladder(ladder::LadderArgs),
     /// Multi-process publish-to-visible latency: shared memory vs a Unix socket.
     Ipc(ipc::IpcArgs),
+    /// A whole mission: the demo's SLAM stream for N ticks with reader processes;
+    /// publish, bytes, latency, reader CPU, attach and memory per window of ticks,
+    /// optionally against another build (bench/results/mission.md).
+    Mission(mission::MissionArgs),
     /// Importing the full office (JSON and binary) against spark_dsg's own load.
     DsgIo(dsg_io::DsgIoArgs),
     /// Hydra's ZMQ stream through `ygg bridge zmq` and Yggdrasil readers, against
@@ -46,6 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::ArchiveSizes => archive_sizes(),
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
+        Command::Mission(args) => mission::run(&args),
         Command::DsgIo(args) => dsg_io::run(&args),
         Command::Capi(args) => capi::run(&args),
         Command::Hydra(args) => hydra::run(&args),

@@ -31,7 +31,6 @@ mod inspect;
 mod query;
 mod serve;
 mod watch;
-mod window;
 
 use std::process::ExitCode;
 

@@ -10,10 +10,9 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use ygg_dsg::replay::SlamReplay;
+use ygg_dsg::replay::window::{Keep, Window};
 use ygg_store::SnapshotFile;
 use ygg_writer::SceneWriter;
-
-use crate::window;
 
 /// Arguments of `ygg serve`.
 #[derive(Parser, Debug)]
@@ -44,7 +43,7 @@ pub struct ServeArgs {
     seconds: Option<f64>,
     /// How much of what the stream adds to keep (a sliding window; default: all).
     #[command(flatten)]
-    keep: window::Keep,
+    keep: KeepArgs,
     /// Readers the scene supports at once.
     #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_READERS)]
     max_readers: usize,
@@ -63,6 +62,33 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = ygg_store::snapshot::PART_ROWS as u64,
           value_parser = clap::value_parser!(u64).range(1..=65536))]
     part_rows: u64,
+}
+
+/// The `--keep-*` options: a sliding window over what the stream adds ([`Window`]).
+#[derive(Clone, Copy, Debug, Default, clap::Args)]
+struct KeepArgs {
+    /// Keep only this many of the agent poses the stream appends (a sliding-window
+    /// trajectory: the oldest is removed as each new one arrives); default: keep all.
+    #[arg(long)]
+    keep_poses: Option<usize>,
+    /// Keep only this many of the objects the stream adds (the oldest is removed with its
+    /// mesh); default: keep all.
+    #[arg(long)]
+    keep_objects: Option<usize>,
+    /// Keep only this many of the mesh points the stream appends to each room's unclaimed
+    /// mesh node (the oldest go first); default: keep all.
+    #[arg(long)]
+    keep_mesh_points: Option<usize>,
+}
+
+impl From<KeepArgs> for Keep {
+    fn from(a: KeepArgs) -> Self {
+        Keep {
+            poses: a.keep_poses,
+            objects: a.keep_objects,
+            mesh_points: a.keep_mesh_points,
+        }
+    }
 }
 
 /// Runs `ygg serve` until a signal or `--seconds`.
@@ -124,7 +150,7 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
     let (mut layers_sent, mut chunks_sent) = (0usize, 0usize);
     let (mut parts_sent, mut chunk_bytes, mut manifest_bytes, mut segments) = (0, 0, 0, 0);
     let mut last_report = start;
-    let mut window = window::Window::new(writer.graph(), args.keep);
+    let mut window = Window::new(writer.graph(), args.keep.into());
     let stop_reason = loop {
         if args
             .seconds

@@ -1,6 +1,9 @@
 //! [`SlamReplay`]: a SLAM-like stream of updates for a served office: agent poses
 //! appended at the tick rate, objects moving and appearing, the mesh growing room by
-//! room. It drives `ygg serve --rate` and `ygg demo`.
+//! room. It drives `ygg serve --rate`, `ygg demo` and `ygg-bench mission`; [`window`]
+//! keeps only the newest of what it adds.
+
+pub mod window;
 
 use crate::NodeSymbol;
 use crate::layout::{self, LayerRole};

@@ -20,8 +20,8 @@ mod commands;
 pub(crate) mod error;
 pub(crate) mod interrupt;
 mod reader;
-mod report;
-mod scenes;
+pub(crate) mod report;
+pub(crate) mod scenes;
 mod socket;
 
 pub use args::IpcArgs;
@@ -32,21 +32,13 @@ use args::Role;
 /// Errors are printed here, after every child was stopped and every shared-memory file
 /// removed, and end the process with status 1.
 pub fn run(args: &IpcArgs) -> Result<(), Box<dyn std::error::Error>> {
-    // iceoryx2 warns on stderr that it found no config file; errors only, unless
-    // IOX2_LOG_LEVEL says otherwise.
-    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
-    let result = match &args.role {
+    let who = match args.role {
+        Some(_) => "ygg-bench ipc reader",
+        None => "ygg-bench ipc",
+    };
+    error::run_or_exit(who, || match &args.role {
         Some(Role::Reader(r)) => reader::main(r),
         None => cases::run(args),
-    };
-    if let Err(e) = result {
-        let who = if args.role.is_some() {
-            "ygg-bench ipc reader"
-        } else {
-            "ygg-bench ipc"
-        };
-        eprintln!("{who}: error: {e}");
-        std::process::exit(1);
-    }
+    });
     Ok(())
 }

@@ -568,11 +568,17 @@ pub const HAND_WRITTEN: &str = "## Where the time goes";
 /// The hand-written section of a report (from its [`HAND_WRITTEN`] heading to the next
 /// `## ` heading), if it has one.
 pub fn hand_written(md: &str) -> Option<String> {
-    let start = md.find(&format!("\n{HAND_WRITTEN}\n"))? + 1;
+    hand_written_section(md, HAND_WRITTEN)
+}
+
+/// The section of `md` under `heading` (a `## ` line), up to the next `## ` heading, if
+/// it has one: a report's hand-written part, carried over when it is written again.
+pub fn hand_written_section(md: &str, heading: &str) -> Option<String> {
+    let start = md.find(&format!("\n{heading}\n"))? + 1;
     let rest = &md[start..];
-    let end = rest[HAND_WRITTEN.len()..]
+    let end = rest[heading.len()..]
         .find("\n## ")
-        .map_or(rest.len(), |i| i + HAND_WRITTEN.len() + 1);
+        .map_or(rest.len(), |i| i + heading.len() + 1);
     Some(rest[..end].to_owned())
 }
 

@@ -31,6 +31,43 @@ fn shm_files(prefix: &str) -> Res<usize> {
 /// were sized from the scene.
 const REFERENCE_MAX_LAYERS: usize = ygg_transport::service::DEFAULT_MAX_SEGMENTS;
 
+/// What one late reader process measured of its attach.
+pub(crate) struct AttachTimes {
+    /// From the process's start to its first nearest-node query answered, ns.
+    pub(crate) attach_ns: u64,
+    /// From just before the spawn (in the benchmark) to the same answer, ns.
+    pub(crate) from_spawn_ns: u64,
+    /// The process's CPU time until the answer, ns.
+    pub(crate) cpu_ns: u64,
+}
+
+/// Starts a reader process on `scene` that attaches, answers one nearest-node query (on
+/// [`QUERY_LAYER`]) and reports its times; returns it (idle until its stdin closes) with
+/// them.
+pub(crate) fn spawn_attacher(scene: &Scene) -> Res<(ReaderProc, AttachTimes)> {
+    let spawned = unix_ns();
+    let mut p = ReaderProc::spawn(
+        "attach reader".to_owned(),
+        scene,
+        &reader_args("attach", Some(QUERY_LAYER)),
+    )?;
+    let line = p.expect("ready", Instant::now() + ATTACH_TIMEOUT)?;
+    let v: Vec<u64> = line
+        .split_whitespace()
+        .skip(1)
+        .filter_map(|x| x.parse().ok())
+        .collect();
+    let [_, started, answered, cpu_ns] = v[..] else {
+        return Err(format!("malformed attach line {line:?}").into());
+    };
+    let times = AttachTimes {
+        attach_ns: answered.saturating_sub(started),
+        from_spawn_ns: answered.saturating_sub(spawned),
+        cpu_ns,
+    };
+    Ok((p, times))
+}
+
 /// One writer's scene and what its attaching readers measured.
 struct Attached {
     scene: Scene,
@@ -73,25 +110,10 @@ impl Attached {
 
     /// One reader process attaches, answers and exits.
     fn sample(&mut self) -> Res<()> {
-        let spawned = unix_ns();
-        let mut p = ReaderProc::spawn(
-            "attach reader".to_owned(),
-            &self.scene,
-            &reader_args("attach", Some(QUERY_LAYER)),
-        )?;
-        let line = p.expect("ready", Instant::now() + ATTACH_TIMEOUT)?;
-        let v: Vec<u64> = line
-            .split_whitespace()
-            .skip(1)
-            .filter_map(|x| x.parse().ok())
-            .collect();
-        let [_, started, answered, cpu_ns] = v[..] else {
-            return Err(format!("malformed attach line {line:?}").into());
-        };
-        self.attach.push(answered.saturating_sub(started) as f64);
-        self.cpu.push(cpu_ns as f64);
-        self.from_spawn
-            .push(answered.saturating_sub(spawned) as f64);
+        let (mut p, t) = spawn_attacher(&self.scene)?;
+        self.attach.push(t.attach_ns as f64);
+        self.cpu.push(t.cpu_ns as f64);
+        self.from_spawn.push(t.from_spawn_ns as f64);
         self.reader_fds
             .push(descriptors(&p.pid().to_string())? as f64);
         self.files.push(shm_files(&self.scene.prefix)? as f64);

@@ -109,7 +109,7 @@ impl Case {
 }
 
 /// Arguments of `ygg-bench ipc reader` for `mode`, with a nearest-node query on `query`.
-pub(super) fn reader_args(mode: &str, query: Option<&str>) -> Vec<String> {
+pub(crate) fn reader_args(mode: &str, query: Option<&str>) -> Vec<String> {
     let mut a = vec!["--mode".to_owned(), mode.to_owned()];
     if let Some(q) = query {
         a.extend(["--query-layer".to_owned(), q.to_owned()]);
@@ -118,20 +118,24 @@ pub(super) fn reader_args(mode: &str, query: Option<&str>) -> Vec<String> {
 }
 
 /// One publish as the writer saw it.
-pub(super) struct Publish {
-    generation: u64,
+pub(crate) struct Publish {
+    /// The generation it published.
+    pub(crate) generation: u64,
     /// Unix ns just before `publish()`.
-    t0: u64,
+    pub(crate) t0: u64,
     /// Unix ns just after.
-    t1: u64,
-    layers_sent: usize,
-    layers_total: usize,
-    bytes: usize,
+    pub(crate) t1: u64,
+    /// Layers it sent.
+    pub(crate) layers_sent: usize,
+    /// Layers of the cut.
+    pub(crate) layers_total: usize,
+    /// Bytes it archived into shared memory.
+    pub(crate) bytes: usize,
 }
 
 /// Per reader: generation -> (visible, answered: Unix ns; the reader thread's CPU ns for
 /// the update).
-pub(super) type Seen = HashMap<u64, [u64; 3]>;
+pub(crate) type Seen = HashMap<u64, [u64; 3]>;
 
 /// A tiny deterministic jitter source (±25 %) so publishes do not lock into phase with
 /// periodic activity (liveness checks, timers).
@@ -188,7 +192,7 @@ fn drive(
 }
 
 /// Asks every reader for its records and reads them (`seen` lines up to `end`).
-pub(super) fn collect_seen(readers: &mut Readers) -> Res<Vec<Seen>> {
+pub(crate) fn collect_seen(readers: &mut Readers) -> Res<Vec<Seen>> {
     readers.send_all("report")?;
     let deadline = Instant::now() + Duration::from_secs(60);
     let mut seen = Vec::with_capacity(readers.procs.len());
@@ -216,31 +220,32 @@ pub(super) fn collect_seen(readers: &mut Readers) -> Res<Vec<Seen>> {
 
 /// Latencies of one driven case, ns.
 #[derive(Default)]
-pub(super) struct Observed {
+pub(crate) struct Observed {
     /// Publish call -> visible, every reader and publish.
-    pub(super) visible: Vec<f64>,
+    pub(crate) visible: Vec<f64>,
     /// Publish call -> visible in every reader (the slowest), per publish.
-    pub(super) all_visible: Vec<f64>,
+    pub(crate) all_visible: Vec<f64>,
     /// Publish call -> first query answered in every reader, per publish.
-    pub(super) all_answered: Vec<f64>,
+    pub(crate) all_answered: Vec<f64>,
     /// `publish()` returned -> visible (transport, wake-up, validation), every reader
     /// and publish.
-    pub(super) returned: Vec<f64>,
+    pub(crate) returned: Vec<f64>,
     /// Duration of `publish()`.
-    pub(super) publish: Vec<f64>,
+    pub(crate) publish: Vec<f64>,
     /// (reader, publish) pairs a slow reader skipped: timed to the newer snapshot that
     /// first showed the publish to it.
-    pub(super) coalesced: usize,
+    pub(crate) coalesced: usize,
     /// (reader, publish) pairs no snapshot showed (not timed; should not happen).
-    pub(super) unseen: usize,
-    pub(super) layers_sent: Vec<f64>,
-    pub(super) layers_total: usize,
-    pub(super) bytes: Vec<f64>,
+    pub(crate) unseen: usize,
+    pub(crate) layers_sent: Vec<f64>,
+    pub(crate) layers_total: usize,
+    pub(crate) bytes: Vec<f64>,
     /// Reader thread CPU per snapshot received, ns, every reader.
-    pub(super) reader_cpu: Vec<f64>,
+    pub(crate) reader_cpu: Vec<f64>,
 }
 
-fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
+/// What the readers saw of `publishes` (each reader's snapshots by generation).
+pub(crate) fn observe(publishes: &[Publish], seen: &[Seen]) -> Observed {
     // Per reader, the snapshots it held, by generation.
     let sorted: Vec<Vec<(u64, [u64; 3])>> = seen
         .iter()

@@ -18,7 +18,10 @@ mod readers;
 mod sizes;
 mod throughput;
 
-pub(crate) use drive::{ATTACH_TIMEOUT, EXIT_GRACE, Jitter, writer};
+pub(crate) use attach::spawn_attacher;
+pub(crate) use drive::{
+    ATTACH_TIMEOUT, EXIT_GRACE, Jitter, Publish, Seen, collect_seen, observe, reader_args, writer,
+};
 
 use super::args::{ALL_GROUPS, Group, IpcArgs};
 use super::child::remove_stale;

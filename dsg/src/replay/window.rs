@@ -1,29 +1,25 @@
-//! [`Window`]: the `--keep-*` options of `ygg serve`. A sliding window over what
-//! the SLAM-like stream adds (agent poses, new objects, mesh points), so a long run
-//! serves a scene whose size stops growing: the workload of `ygg-soak`, where any
-//! memory that keeps growing is a leak, not the scene.
+//! [`Window`]: a sliding window over what the SLAM-like stream ([`SlamReplay`]) adds
+//! (agent poses, new objects, mesh points), so a long run serves a scene whose size stops
+//! growing: the `--keep-*` options of `ygg serve` (the workload of `ygg-soak`, where any
+//! memory that keeps growing is a leak, not the scene) and of `ygg-bench mission`.
 
+use super::{SlamReplay, StepReport};
+use crate::layout::{self, LayerRole};
 use std::collections::{HashSet, VecDeque};
-use ygg_dsg::layout::{self, LayerRole};
-use ygg_dsg::replay::{SlamReplay, StepReport};
 use ygg_store::query::children;
 use ygg_store::{EditResult, LayerId, NodeId, SceneGraph, SceneView};
 
 /// How much of what the stream added to keep (`None`: all of it).
-#[derive(Clone, Copy, Debug, Default, clap::Args)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Keep {
-    /// Keep only this many of the agent poses the stream appends (a sliding-window
-    /// trajectory: the oldest is removed as each new one arrives); default: keep all.
-    #[arg(long)]
-    pub keep_poses: Option<usize>,
-    /// Keep only this many of the objects the stream adds (the oldest is removed with its
-    /// mesh); default: keep all.
-    #[arg(long)]
-    pub keep_objects: Option<usize>,
-    /// Keep only this many of the mesh points the stream appends to each room's unclaimed
-    /// mesh node (the oldest go first); default: keep all.
-    #[arg(long)]
-    pub keep_mesh_points: Option<usize>,
+    /// Agent poses the stream appended to keep (a sliding-window trajectory: the oldest
+    /// is removed as each new one arrives).
+    pub poses: Option<usize>,
+    /// Objects the stream added to keep (the oldest is removed with its mesh).
+    pub objects: Option<usize>,
+    /// Mesh points the stream appended to each room's unclaimed mesh node to keep (the
+    /// oldest go first).
+    pub mesh_points: Option<usize>,
 }
 
 /// The window's state over one scene.
@@ -79,7 +75,7 @@ impl Window {
         replay: &SlamReplay,
         report: StepReport,
     ) -> EditResult {
-        if let Some(keep) = self.keep.keep_poses {
+        if let Some(keep) = self.keep.poses {
             if let Some((pose, _)) = replay.pose().filter(|_| report.poses > 0) {
                 self.poses.push_back(pose);
             }
@@ -88,7 +84,7 @@ impl Window {
                 g.remove_node(oldest)?;
             }
         }
-        if let Some(keep) = self.keep.keep_objects {
+        if let Some(keep) = self.keep.objects {
             if report.objects_added > 0 {
                 let new: Vec<NodeId> = self
                     .object_layers
@@ -108,7 +104,7 @@ impl Window {
                 g.remove_node(oldest)?;
             }
         }
-        if let Some(keep) = self.keep.keep_mesh_points
+        if let Some(keep) = self.keep.mesh_points
             && report.mesh_points > 0
         {
             for &(id, base) in &self.meshes {
@@ -129,7 +125,7 @@ impl Window {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ygg_dsg::office::{OfficeParams, generate};
+    use crate::office::{OfficeParams, generate};
 
     #[test]
     fn the_scene_stops_growing_once_the_window_is_full() {
@@ -142,9 +138,9 @@ mod tests {
         )
         .expect("office");
         let keep = Keep {
-            keep_poses: Some(20),
-            keep_objects: Some(2),
-            keep_mesh_points: Some(128),
+            poses: Some(20),
+            objects: Some(2),
+            mesh_points: Some(128),
         };
         let mut replay = SlamReplay::new(&g, 7);
         let mut window = Window::new(&g, keep);
