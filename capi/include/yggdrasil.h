@@ -173,22 +173,30 @@ typedef struct ygg_writer_options {
   // Initial capacity of a layer's shared-memory segment in bytes; grown in
   // power-of-two steps (default 64 KiB).
   size_t initial_segment_bytes;
-  // Most layers the scene may have while this writer publishes it (default: a quarter
-  // more than the graph's layers, at least 64 more); a publish of more fails. Set it for a scene that
-  // starts small and grows; a lower bound makes readers attach faster.
+  // Most segments the scene may have while this writer publishes it (default: a
+  // quarter more than the graph's layers, at least 256 more); a publish of more fails.
+  // Set it for a scene that starts small and grows; a lower bound makes readers attach
+  // faster.
   size_t max_layers;
+  // Rows the newest part of a layer takes before a new part starts (default 256): an
+  // appended node resends at most this many rows of its layer.
+  size_t part_rows;
 } ygg_writer_options;
 
 // What one `ygg_writer_publish` sent.
 typedef struct ygg_publish_report {
   // The snapshot generation published.
   uint64_t generation;
-  // Layers whose segment was (re)published.
+  // Layers of which a part was (re)published.
   size_t layers_sent;
   // Layers left as they were.
   size_t layers_unchanged;
-  // Bytes archived into shared memory (layer segments and manifest).
+  // Bytes archived into shared memory (parts, chunks, structure and manifest).
   size_t bytes_sent;
+  // Parts (row chunks) of the changed layers that were (re)published.
+  size_t parts_sent;
+  // Segments the published cut names.
+  size_t segments;
 } ygg_publish_report;
 
 // A writer's state (`ygg_writer_status`).

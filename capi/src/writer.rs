@@ -38,10 +38,14 @@ pub struct YggWriterOptions {
     /// Initial capacity of a layer's shared-memory segment in bytes; grown in
     /// power-of-two steps (default 64 KiB).
     pub initial_segment_bytes: usize,
-    /// Most layers the scene may have while this writer publishes it (default: a quarter
-    /// more than the graph's layers, at least 64 more); a publish of more fails. Set it for a scene that
-    /// starts small and grows; a lower bound makes readers attach faster.
+    /// Most segments the scene may have while this writer publishes it (default: a
+    /// quarter more than the graph's layers, at least 256 more); a publish of more fails.
+    /// Set it for a scene that starts small and grows; a lower bound makes readers attach
+    /// faster.
     pub max_layers: usize,
+    /// Rows the newest part of a layer takes before a new part starts (default 256): an
+    /// appended node resends at most this many rows of its layer.
+    pub part_rows: usize,
 }
 
 /// What one `ygg_writer_publish` sent.
@@ -50,12 +54,16 @@ pub struct YggWriterOptions {
 pub struct YggPublishReport {
     /// The snapshot generation published.
     pub generation: u64,
-    /// Layers whose segment was (re)published.
+    /// Layers of which a part was (re)published.
     pub layers_sent: usize,
     /// Layers left as they were.
     pub layers_unchanged: usize,
-    /// Bytes archived into shared memory (layer segments and manifest).
+    /// Bytes archived into shared memory (parts, chunks, structure and manifest).
     pub bytes_sent: usize,
+    /// Parts (row chunks) of the changed layers that were (re)published.
+    pub parts_sent: usize,
+    /// Segments the published cut names.
+    pub segments: usize,
 }
 
 /// A writer's state (`ygg_writer_status`).
@@ -108,6 +116,9 @@ pub unsafe extern "C" fn ygg_writer_create(
         }
         if options.initial_segment_bytes > 0 {
             builder = builder.initial_segment_bytes(options.initial_segment_bytes);
+        }
+        if options.part_rows > 0 {
+            builder = builder.part_rows(options.part_rows);
         }
         // Created on an empty graph first so that a failure leaves the caller's graph
         // untouched; a writer has published nothing before its first `publish`, so
@@ -194,6 +205,8 @@ pub unsafe extern "C" fn ygg_writer_publish(
                 layers_sent: sent.layers_sent,
                 layers_unchanged: sent.layers_unchanged,
                 bytes_sent: sent.bytes_sent,
+                parts_sent: sent.parts_sent,
+                segments: sent.segments,
             });
         }
         Ok(())

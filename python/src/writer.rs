@@ -27,21 +27,29 @@ pub struct Writer {
 impl Writer {
     /// Creates the scene `scene_name` and publishes `graph` as its first snapshot.
     ///
-    /// `max_layers` bounds the scene's layers while this writer publishes it (default:
-    /// a quarter more than the graph's and at least 64 more; set it for a graph that
-    /// starts small and grows).
+    /// `max_layers` bounds the scene's segments while this writer publishes it (default:
+    /// a quarter more than the graph's and at least 256 more; set it for a graph that
+    /// starts small and grows). `part_rows` is how many rows the newest part of a layer
+    /// takes before a new part starts (default 256): appending a node resends at most
+    /// that many rows of its layer.
     ///
     /// Raises `TransportError` (the scene is already served, a bad name, ...) and
     /// `MutationError` if `graph` is already published by another writer.
     #[new]
-    #[pyo3(signature = (scene_name, graph, max_readers = 8, max_layers = None))]
+    #[pyo3(signature = (scene_name, graph, max_readers = 8, max_layers = None, part_rows = None))]
     fn py_new(
         py: Python<'_>,
         scene_name: &str,
         graph: Py<PySceneGraph>,
         max_readers: usize,
         max_layers: Option<usize>,
+        part_rows: Option<usize>,
     ) -> PyResult<Self> {
+        if part_rows == Some(0) {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "part_rows must be at least 1",
+            ));
+        }
         let owned = {
             let mut home = graph.get().home();
             match &mut *home {
@@ -56,7 +64,10 @@ impl Writer {
         // The writer takes a clone: a failed create returns no graph, and the Python
         // graph must stay as it was when construction fails.
         let created = py.detach(|| {
-            let builder = SceneWriter::builder(scene_name).max_readers(max_readers);
+            let mut builder = SceneWriter::builder(scene_name).max_readers(max_readers);
+            if let Some(rows) = part_rows {
+                builder = builder.part_rows(rows);
+            }
             match max_layers {
                 Some(n) => builder.max_layers(n),
                 None => builder,
@@ -85,7 +96,9 @@ impl Writer {
     }
 
     /// Publishes the layers changed since the last publish, then a manifest (without the
-    /// GIL). Returns `{"generation", "layers_sent", "layers_unchanged", "bytes_sent"}`.
+    /// GIL). Returns `{"generation", "layers_sent", "parts_sent", "layers_unchanged",
+    /// "bytes_sent", "segments"}` (`parts_sent`: the row chunks of the changed layers that
+    /// changed; `segments`: every segment the cut names).
     ///
     /// Raises `TransportError` (shared memory full, ...; nothing is half-published).
     fn publish<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -100,6 +113,8 @@ impl Writer {
         out.set_item("layers_sent", report.layers_sent)?;
         out.set_item("layers_unchanged", report.layers_unchanged)?;
         out.set_item("bytes_sent", report.bytes_sent)?;
+        out.set_item("parts_sent", report.parts_sent)?;
+        out.set_item("segments", report.segments)?;
         Ok(out)
     }
 

@@ -327,12 +327,17 @@ class Writer:
         graph: SceneGraph,
         max_readers: int = 8,
         max_layers: Optional[int] = None,
+        part_rows: Optional[int] = None,
     ) -> None:
-        """Creates the scene and publishes ``graph``; ``max_layers`` bounds its layers
-        (default a quarter more than the graph's, at least 64 more); raises
-        ``TransportError``."""
+        """Creates the scene and publishes ``graph``; ``max_layers`` bounds its segments
+        (default a quarter more than the graph's, at least 256 more); ``part_rows`` rows
+        fill a layer's newest part before another starts (default 256; each publish
+        resends only the parts whose rows changed); raises ``TransportError``, and
+        ``ValueError`` for ``part_rows=0``."""
     def publish(self) -> Dict[str, int]:
-        """Sends the changed layers and a manifest."""
+        """Sends the changed parts of the changed layers and a manifest:
+        ``{"generation", "layers_sent", "parts_sent", "layers_unchanged", "bytes_sent",
+        "segments"}``."""
     @property
     def generation(self) -> int:
         """The last generation published."""

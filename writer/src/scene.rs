@@ -183,7 +183,8 @@ impl SceneWriterBuilder {
             graph,
             segments: SegmentCache::with_point_chunk_len(self.point_chunk_len)
                 .with_part_rows(self.part_rows, MAX_PART_ROWS.max(self.part_rows)),
-            publisher: self.publisher.max_segments(max_layers).create()?,
+            // One more for the structure segment every cut names.
+            publisher: self.publisher.max_segments(max_layers + 1).create()?,
             published_segments: BTreeSet::new(),
             published_generation: HashMap::new(),
             last_cut: None,
@@ -204,10 +205,11 @@ impl SceneWriter {
         }
     }
 
-    /// Most segments (layers and point chunks) a publish may name
-    /// ([`SceneWriterBuilder::max_layers`]).
+    /// Most segments (parts, point and tree chunks) a publish may name, the structure
+    /// segment aside ([`SceneWriterBuilder::max_layers`]).
     pub fn max_layers(&self) -> usize {
-        self.publisher.max_segments()
+        // The publisher's bound has room for the structure segment besides.
+        self.publisher.max_segments().saturating_sub(1)
     }
 
     /// The live graph.

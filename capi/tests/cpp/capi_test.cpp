@@ -494,6 +494,75 @@ void writer_and_reader(const std::string& scene) {
   }
 }
 
+// A layer split into parts of 4 rows (`part_rows`), growing by appends, edited in the middle
+// and trimmed at the front: a C reader's answers equal those of the live graph's snapshot,
+// and an append resends one part.
+void parts_of_a_growing_layer(const std::string& scene) {
+  ygg_graph* g = nullptr;
+  EXPECT_OK(ygg_graph_create(&g));
+  std::uint32_t poses = 0;
+  EXPECT_OK(ygg_graph_add_layer(g, "POSES", &poses));
+  EXPECT_OK(ygg_graph_enable_layer_index(g, poses));
+  ygg_writer_options options{};
+  options.part_rows = 4;
+  ygg_writer* writer = nullptr;
+  EXPECT_OK(ygg_writer_create((scene + "-parts").c_str(), g, &options, &writer));
+  ygg_graph* live = nullptr;
+  EXPECT_OK(ygg_writer_graph(writer, &live));
+  ygg_reader* reader = nullptr;
+  ygg_reader_options wait{5000, false, false};
+  ygg_publish_report report{};
+  std::uint64_t next = 100;
+  const auto append = [&](int count) {
+    for (int k = 0; k < count; ++k, ++next) {
+      const float xyz[3] = {0.5f * static_cast<float>(next), 1.0f, 0.0f};
+      EXPECT_OK(ygg_graph_add_node(live, next, poses));
+      EXPECT_OK(ygg_graph_set_geometry(live, next, xyz, 1));
+      if (next > 100) EXPECT_OK(ygg_graph_add_edge(live, next - 1, next, "odometry"));
+    }
+  };
+  const auto nearest = [&](const ygg_snapshot* s, const float* c) {
+    ygg_node_list list{nullptr, nullptr, 0};
+    EXPECT_OK(ygg_snapshot_nearest_nodes(s, poses, c, 3, &list));
+    std::vector<std::uint64_t> ids(list.ids, list.ids + list.len);
+    EXPECT_OK(ygg_node_list_free(&list));
+    return ids;
+  };
+  for (int step = 0; step < 12; ++step) {
+    append(10);
+    if (step == 6) {
+      const float moved[3] = {3.0f, 9.0f, 0.0f};
+      EXPECT_OK(ygg_graph_set_geometry(live, 110, moved, 1));  // an edit in an old part
+      for (std::uint64_t old = 100; old < 105; ++old) EXPECT_OK(ygg_graph_remove_node(live, old));
+    }
+    EXPECT_OK(ygg_writer_publish(writer, &report));
+    if (reader == nullptr) EXPECT_OK(ygg_reader_open((scene + "-parts").c_str(), &wait, &reader));
+    ygg_snapshot* got = nullptr;
+    EXPECT_OK(ygg_reader_wait_next(reader, 5000000000ull, &got));
+    ygg_snapshot* truth = nullptr;
+    EXPECT_OK(ygg_graph_snapshot(live, &truth));
+    if (got != nullptr && truth != nullptr) {
+      std::size_t a = 0, b = 0;
+      EXPECT_OK(ygg_snapshot_node_count(got, &a));
+      EXPECT_OK(ygg_snapshot_node_count(truth, &b));
+      EXPECT(a == b);
+      for (float x : {0.0f, 7.3f, 30.0f, 80.0f}) {
+        const float c[3] = {x, 1.0f, 0.0f};
+        EXPECT(nearest(got, c) == nearest(truth, c));
+      }
+    }
+    for (ygg_snapshot* held : {got, truth}) {
+      if (held != nullptr) EXPECT_OK(ygg_snapshot_destroy(held));
+    }
+  }
+  EXPECT(report.segments > 10);  // the poses lie in many parts
+  append(1);
+  EXPECT_OK(ygg_writer_publish(writer, &report));
+  EXPECT(report.parts_sent == 1 && report.layers_sent == 1);
+  if (reader != nullptr) EXPECT_OK(ygg_reader_destroy(reader));
+  EXPECT_OK(ygg_writer_destroy(writer));
+}
+
 void cpp_wrapper(const std::string& scene) {
   ygg::SceneGraph g;
   const auto rooms = g.add_layer("ROOMS");
@@ -651,6 +720,7 @@ int main(int argc, char** argv) {
   EXPECT_OK(ygg_snapshot_destroy(s));
   EXPECT_OK(ygg_graph_destroy(g));
   writer_and_reader(scene);
+  parts_of_a_growing_layer(scene);
   cpp_wrapper(scene);
   whereabouts_and_log_level(fixtures);
   const std::string cleanup = std::string(dir) + "/scene.ygg";
