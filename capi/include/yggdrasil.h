@@ -178,7 +178,7 @@ typedef struct ygg_writer_options {
   // Set it for a scene that starts small and grows; a lower bound makes readers attach
   // faster.
   size_t max_layers;
-  // Rows the newest part of a layer takes before a new part starts (default 256): an
+  // Rows the newest part of a layer takes before a new part starts (default 128): an
   // appended node resends at most this many rows of its layer.
   size_t part_rows;
 } ygg_writer_options;

@@ -43,7 +43,7 @@ pub struct YggWriterOptions {
     /// Set it for a scene that starts small and grows; a lower bound makes readers attach
     /// faster.
     pub max_layers: usize,
-    /// Rows the newest part of a layer takes before a new part starts (default 256): an
+    /// Rows the newest part of a layer takes before a new part starts (default 128): an
     /// appended node resends at most this many rows of its layer.
     pub part_rows: usize,
 }

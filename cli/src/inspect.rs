@@ -18,7 +18,7 @@ use ygg_dsg::NodeSymbol;
 use ygg_dsg::layout::{self, Layout};
 use ygg_dsg::objects::Objects;
 use ygg_store::index::SpatialIndex;
-use ygg_store::snapshot::segment_layer_part;
+use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, segment_layer_part};
 use ygg_store::{LayerId, NodeId, SceneView, SnapshotFile};
 
 use crate::query::{live_snapshot, seconds};
@@ -83,7 +83,9 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
             let snapshot = live_snapshot(scene, seconds(args.timeout, "--timeout")?)?;
             let raw = snapshot.raw();
             let memory = Memory {
-                manifest: raw.manifest_bytes().len(),
+                // The structure segment counts with the manifest.
+                manifest: raw.manifest_bytes().len()
+                    + raw.layer(STRUCTURE_SEGMENT_ID).map_or(0, <[u8]>::len),
                 layers: raw.layers().fold(BTreeMap::new(), |mut bytes, (e, b)| {
                     // A layer's bytes: its parts and their chunks.
                     if let Some((layer, _)) = segment_layer_part(e.layer_id) {

@@ -30,7 +30,7 @@ impl Writer {
     /// `max_layers` bounds the scene's segments while this writer publishes it (default:
     /// a quarter more than the graph's and at least 256 more; set it for a graph that
     /// starts small and grows). `part_rows` is how many rows the newest part of a layer
-    /// takes before a new part starts (default 256): appending a node resends at most
+    /// takes before a new part starts (default 128): appending a node resends at most
     /// that many rows of its layer.
     ///
     /// Raises `TransportError` (the scene is already served, a bad name, ...) and

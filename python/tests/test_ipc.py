@@ -13,8 +13,9 @@ from conftest import binary
 
 
 def test_python_reader_follows_a_rust_writer(scene_name, procs):
+    # Growing layers in parts of a few rows: the reader joins many part segments.
     writer = procs([binary("ygg"), "serve", "--scene", scene_name, "--scale", "0.05",
-                    "--rate", "30", "--seconds", "30"])
+                    "--rate", "30", "--seconds", "30", "--part-rows", "8"])
     with yggdrasil.Reader(scene_name, wait_for_writer=20) as reader:
         generations = []
         while len(generations) < 5:

@@ -331,7 +331,7 @@ class Writer:
     ) -> None:
         """Creates the scene and publishes ``graph``; ``max_layers`` bounds its segments
         (default a quarter more than the graph's, at least 256 more); ``part_rows`` rows
-        fill a layer's newest part before another starts (default 256; each publish
+        fill a layer's newest part before another starts (default 128; each publish
         resends only the parts whose rows changed); raises ``TransportError``, and
         ``ValueError`` for ``part_rows=0``."""
     def publish(self) -> Dict[str, int]:

@@ -85,7 +85,8 @@ impl Hosts {
         })
     }
 
-    /// `ygg serve` of a small office on the robot at `rate` updates per second.
+    /// `ygg serve` of a small office on the robot at `rate` updates per second, its
+    /// growing layers in parts of a few rows (many part segments cross the relay).
     fn writer(&self, rate: &str, watchdog: &Watchdog) -> Proc {
         let args = [
             "serve",
@@ -95,6 +96,8 @@ impl Hosts {
             "0.05",
             "--rate",
             rate,
+            "--part-rows",
+            "8",
         ];
         let command = self.link.command(0, &self.robot, &binary("ygg"), &args);
         let writer = Proc::spawn(command, "writer", watchdog);

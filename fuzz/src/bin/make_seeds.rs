@@ -7,6 +7,7 @@ use std::path::Path;
 
 use ygg_dsg::office::{OfficeParams, generate};
 use ygg_store::{FeatureValue, NodeId, SceneGraph};
+use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, part_segment_id};
 use ygg_transport::ManifestEntry;
 use ygg_transport::protocol::{
     MANIFEST_LAYER_ID, SegmentHeader, SegmentKind, encode_manifest_prefix, manifest_prefix_len,
@@ -43,14 +44,15 @@ fn small_graph() -> Result<SceneGraph, Box<dyn std::error::Error>> {
     Ok(g)
 }
 
-fn header(kind: SegmentKind, layer_id: u32, generation: u64, len: usize) -> Vec<u8> {
+fn header(kind: SegmentKind, layer_id: u64, generation: u64, len: usize) -> Vec<u8> {
     let h = SegmentHeader::new(kind, layer_id, 1, generation, len as u64, 0);
     let mut out = Vec::new();
     out.extend_from_slice(&h.magic.to_le_bytes());
     out.extend_from_slice(&h.version.to_le_bytes());
     out.extend_from_slice(&h.kind.to_le_bytes());
-    out.extend_from_slice(&h.layer_id.to_le_bytes());
     out.extend_from_slice(&h.flags.to_le_bytes());
+    out.extend_from_slice(&h.reserved.to_le_bytes());
+    out.extend_from_slice(&h.layer_id.to_le_bytes());
     out.extend_from_slice(&h.session.to_le_bytes());
     out.extend_from_slice(&h.generation.to_le_bytes());
     out.extend_from_slice(&h.len.to_le_bytes());
@@ -70,18 +72,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(file.parent().expect("a folder"))?;
     g.save(file)?;
 
-    let (manifest, layers) = g.to_segments();
-    for (i, layer) in layers.iter().enumerate() {
-        let mut bytes = header(SegmentKind::Layer, i as u32, 1, layer.len());
-        bytes.extend_from_slice(layer);
-        write("received_segment", &format!("layer{i}"), &bytes)?;
-    }
-    let entries: Vec<ManifestEntry> = (0..layers.len() as u32)
-        .map(|layer_id| ManifestEntry {
-            layer_id,
+    let archived = g.to_segments();
+    let mut entries = Vec::new();
+    for (layer, bytes) in g.layers().zip(&archived.layers) {
+        let id = part_segment_id(layer, 0).expect("a small layer id");
+        let mut seed = header(SegmentKind::Layer, id, 1, bytes.len());
+        seed.extend_from_slice(bytes);
+        write("received_segment", &format!("layer{}", layer.0), &seed)?;
+        entries.push(ManifestEntry {
+            layer_id: id,
             generation: 1,
-        })
-        .collect();
+        });
+    }
+    let mut seed = header(SegmentKind::Layer, STRUCTURE_SEGMENT_ID, 1, archived.structure.len());
+    seed.extend_from_slice(&archived.structure);
+    write("received_segment", "structure", &seed)?;
+    entries.push(ManifestEntry {
+        layer_id: STRUCTURE_SEGMENT_ID,
+        generation: 1,
+    });
+    let manifest = archived.manifest;
     let mut prefix = vec![0; manifest_prefix_len(entries.len())];
     encode_manifest_prefix(&entries, &mut prefix);
     let mut bytes = header(

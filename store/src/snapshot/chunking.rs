@@ -54,7 +54,7 @@ pub(crate) fn withholds_node_tree(points: usize, members: usize, min_points: usi
 /// Rows of the newest part of a layer a publishing writer lets grow before it seals the
 /// part and starts another (`SegmentCache::with_part_rows`): appending a row resends at
 /// most this many rows.
-pub const PART_ROWS: usize = 256;
+pub const PART_ROWS: usize = 128;
 
 /// Most rows one part of a layer split into parts may hold: sealed parts merge up to it
 /// (so a layer of n rows has O(log n + n / MAX_PART_ROWS) parts), a part past it is

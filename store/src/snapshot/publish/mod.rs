@@ -6,6 +6,7 @@ mod by_parent;
 mod chunk_source;
 mod chunk_state;
 mod layer_index_update;
+mod part_patch;
 mod parts;
 mod segment_cache;
 
