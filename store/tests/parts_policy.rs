@@ -3,8 +3,7 @@
 //! removals drop empty parts, a bulk part is split (`store/src/snapshot/publish/parts.rs`).
 
 use ygg_store::snapshot::SegmentCache;
-use ygg_store::{LayerId, NodeId, SceneGraph, SceneView};
-
+use ygg_store::{LayerId, NodeId, SceneGraph};
 
 fn poses(n: u64) -> (SceneGraph, LayerId) {
     let mut g = SceneGraph::new();

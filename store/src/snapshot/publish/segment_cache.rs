@@ -12,18 +12,16 @@
 //! against fresh builds under random mutations, and the published parts against the
 //! live graph's answers.
 
+use super::part_patch::Cached;
 use super::parts::{LayerParts, PartRows, PublishedParts};
 use crate::bytes::{SegmentBytes, archive};
 use crate::graph::Layer;
-use crate::graph::LayerChanges;
 use crate::snapshot::chunking::{MAX_POINT_CHUNK_LEN, POINT_CHUNK_LEN, TREE_CHUNK_MIN_POINTS};
 use crate::snapshot::schema::{
-    ArchivedManifest, LayerSegment, Manifest, ManifestLayer, NO_PARENT, Structure,
-    cut_field_offsets,
+    ArchivedManifest, LayerSegment, Manifest, ManifestLayer, Structure, cut_field_offsets,
 };
-use crate::{LayerId, NodeId, SceneGraph};
+use crate::{LayerId, SceneGraph};
 use rustc_hash::FxHashMap;
-use std::ops::Range;
 
 /// Incremental segments and manifest of one live graph, owned by whoever publishes it:
 /// after a small change to a large layer only the changed rows are rebuilt.
@@ -447,4 +445,3 @@ fn refresh_entry(
 fn extra_segments(p: &LayerParts) -> usize {
     PublishedParts::new(p).segment_count() - 1
 }
-
