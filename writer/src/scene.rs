@@ -274,12 +274,10 @@ impl SceneWriter {
         // counted (a layer's parts and chunks may have changed) before any goes out.
         let mut reshaped = false;
         for layer in &changed {
-            let before = self.segments.published(*layer).map(|p| p.shape());
-            let after = self
+            reshaped |= self
                 .segments
                 .published_layer(&mut self.graph, *layer)
-                .shape();
-            reshaped |= before.as_ref() != Some(&after);
+                .reshaped();
         }
         let layer_count = self.graph.layer_count();
         let segments = layer_count + self.segments.extra_segments();
@@ -298,7 +296,14 @@ impl SceneWriter {
         for layer in &changed {
             let published = self.segments.published(*layer).expect("brought up to date");
             report.layers_sent += 1;
-            for part in published.parts() {
+            // After a publish that went out, only the parts that changed since may differ
+            // from what readers hold; otherwise every part is looked at.
+            let parts: Vec<_> = if incremental {
+                published.changed_parts().collect()
+            } else {
+                published.parts().iter().collect()
+            };
+            for part in parts {
                 let id = part.segment_id();
                 if self.publisher.layer_generation(id) != Some(part.segment.generation) {
                     let len = part.segment.archived_len();
@@ -413,7 +418,7 @@ impl SceneWriter {
     fn patch_entries(&self, entries: &mut [ManifestEntry], changed: &[LayerId]) {
         for layer in changed {
             let published = self.segments.published(*layer).expect("brought up to date");
-            for (id, generation) in published.segments() {
+            for (id, generation) in published.changed_segments() {
                 if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
                     entries[i].generation = generation;
                 }

@@ -63,26 +63,27 @@ impl Publisher {
         let mut ids = Vec::new();
         for l in layers {
             let published = self.segments.published_layer(g, l);
-            for p in published.parts() {
+            // As a publishing writer does after a publish that went out: only the parts
+            // that changed are looked at; a changed part the cache did not flag would
+            // leave the reader its old bytes.
+            for p in published.changed_parts() {
                 let id = p.segment_id();
                 if self.held.get(&id).map(|h| h.0) != Some(p.segment.generation) {
                     self.held
                         .insert(id, (p.segment.generation, archive(p.segment)));
                 }
-                ids.push(id);
                 for (i, (id, generation)) in p.chunks().enumerate() {
                     if self.held.get(&id).map(|h| h.0) != Some(generation) {
                         self.held.insert(id, (generation, archive(&p.chunk(i))));
                     }
-                    ids.push(id);
                 }
                 for (id, generation, tree) in p.tree_chunks() {
                     if self.held.get(&id).map(|h| h.0) != Some(generation) {
                         self.held.insert(id, (generation, archive(&tree)));
                     }
-                    ids.push(id);
                 }
             }
+            ids.extend(published.segments().into_iter().map(|(id, _)| id));
         }
         ids.sort_unstable();
         self.held.retain(|id, _| ids.binary_search(id).is_ok());

@@ -51,6 +51,18 @@ pub(super) struct Part {
     pub(super) cached: Box<Cached>,
     /// The layer's update count when the part last changed.
     touched: u64,
+    /// Whether the part is in published form (`ChunkState::publish_form`); only a part
+    /// that changed is put back inline and published again.
+    published: bool,
+    /// The ids of the chunk segments the part last published beside its own.
+    chunk_ids: Vec<u64>,
+}
+
+impl Part {
+    /// Segments the part publishes: its own and its chunks (as last published).
+    fn segments(&self) -> usize {
+        1 + self.chunk_ids.len()
+    }
 }
 
 /// A layer's parts, ascending by id range.
@@ -67,6 +79,9 @@ pub(super) struct LayerParts {
     next: u32,
     /// Updates of the layer so far.
     updates: u64,
+    /// Whether the last update or publish form changed the layer's segments (parts added,
+    /// merged, split or dropped, or a part's chunks): the cut's entries are rebuilt.
+    pub(super) reshaped: bool,
 }
 
 impl LayerParts {
@@ -83,6 +98,7 @@ impl LayerParts {
             free: Vec::new(),
             next: 0,
             updates: 0,
+            reshaped: true,
         });
         let piece = rows.map_or(usize::MAX, |r| r.max);
         if ids.len() <= piece {
@@ -104,7 +120,52 @@ impl LayerParts {
             low,
             cached: Cached::build(graph, layer, number, ids),
             touched: self.updates,
+            published: false,
+            chunk_ids: Vec::new(),
         });
+        self.reshaped = true;
+    }
+
+    /// Segments the layer publishes (parts and their chunks, as last published).
+    pub(super) fn segment_count(&self) -> usize {
+        self.parts.iter().map(Part::segments).sum()
+    }
+
+    /// Puts every part that changed since the last publish (or that is inline) in published
+    /// form, building the node index trees it does not withhold; notes whether its chunk
+    /// segments changed.
+    pub(super) fn publish_form(&mut self, graph: &SceneGraph, chunk_len: usize, tree_min: usize) {
+        for part in self.parts.iter_mut().filter(|p| !p.published) {
+            let cached = &mut *part.cached;
+            cached
+                .chunks
+                .build_stale_node_trees(graph, &mut cached.segment, tree_min);
+            cached
+                .chunks
+                .publish_form(&mut cached.segment, chunk_len, tree_min);
+            part.published = true;
+            let published = PublishedLayer::new(&cached.segment, &cached.chunks);
+            let ids: Vec<u64> = published
+                .chunks()
+                .map(|(id, _)| id)
+                .chain(published.tree_chunks().map(|(id, _, _)| id))
+                .collect();
+            if ids != part.chunk_ids {
+                self.reshaped = true;
+                part.chunk_ids = ids;
+            }
+        }
+    }
+
+    /// The first part inline (what `SegmentCache::layer_segment` hands out for a layer in
+    /// one piece).
+    pub(super) fn first_inline(&mut self) -> &mut Cached {
+        let part = &mut self.parts[0];
+        if part.published {
+            part.cached.chunks.restore(&mut part.cached.segment);
+            part.published = false;
+        }
+        &mut part.cached
     }
 
     fn allocate(&mut self) -> u32 {
@@ -156,6 +217,7 @@ impl LayerParts {
             return None;
         }
         self.updates += 1;
+        self.reshaped = false;
         let in_layer = |id: &NodeId| graph.nodes.get(id).is_some_and(|n| n.layer == layer);
         if let Some(rows) = rows {
             self.seal_tail(&changes.nodes, rows, in_layer, graph, layer);
@@ -182,6 +244,10 @@ impl LayerParts {
                 continue;
             }
             c.geometry = changes.geometry;
+            if part.published {
+                part.cached.chunks.restore(&mut part.cached.segment);
+                part.published = false;
+            }
             let old_ids = part.cached.segment.ids.clone();
             let expected = single.then_some(l.nodes.len());
             let number = part.number;
@@ -261,6 +327,7 @@ impl LayerParts {
             }
             let pieces: Vec<Vec<u64>> = ids.chunks(piece).map(<[u64]>::to_vec).collect();
             self.free.push(part.number);
+            self.reshaped = true;
             for (i, ids) in pieces.into_iter().enumerate() {
                 let low = if i == 0 { part.low } else { ids[0] };
                 self.push_built(graph, layer, low, ids);
@@ -276,6 +343,7 @@ impl LayerParts {
             if self.parts[at].cached.segment.ids.is_empty() {
                 let gone = self.parts.remove(at);
                 self.free.push(gone.number);
+                self.reshaped = true;
                 if at == 0 {
                     self.parts[0].low = 0;
                 }
@@ -305,8 +373,11 @@ impl LayerParts {
                 ids.extend_from_slice(&right.cached.segment.ids);
                 let number = left.number;
                 self.free.push(right.number);
-                self.parts[at - 1].cached = Cached::build(graph, layer, number, ids);
-                self.parts[at - 1].touched = self.updates;
+                let merged = &mut self.parts[at - 1];
+                merged.cached = Cached::build(graph, layer, number, ids);
+                merged.touched = self.updates;
+                merged.published = false;
+                self.reshaped = true;
             }
             at -= 1;
         }
@@ -318,6 +389,9 @@ impl LayerParts {
 #[derive(Debug, Clone)]
 pub struct PublishedParts<'c> {
     parts: Vec<PublishedLayer<'c>>,
+    /// Per part, whether it changed in the layer's last update.
+    changed: Vec<bool>,
+    reshaped: bool,
 }
 
 impl<'c> PublishedParts<'c> {
@@ -328,6 +402,12 @@ impl<'c> PublishedParts<'c> {
                 .iter()
                 .map(|p| PublishedLayer::new(&p.cached.segment, &p.cached.chunks))
                 .collect(),
+            changed: parts
+                .parts
+                .iter()
+                .map(|p| p.touched == parts.updates)
+                .collect(),
+            reshaped: parts.reshaped,
         }
     }
 
@@ -336,28 +416,44 @@ impl<'c> PublishedParts<'c> {
         &self.parts
     }
 
+    /// The parts that changed in the layer's last update (every part of a layer built
+    /// afresh): the others are as the publish before sent them.
+    pub fn changed_parts(&self) -> impl Iterator<Item = &PublishedLayer<'c>> {
+        self.parts
+            .iter()
+            .zip(&self.changed)
+            .filter_map(|(p, &changed)| changed.then_some(p))
+    }
+
+    /// Whether the layer's segments (their ids) changed in its last update: parts added,
+    /// merged, split or dropped, or a part's chunks.
+    pub fn reshaped(&self) -> bool {
+        self.reshaped
+    }
+
     /// Every segment the layer publishes (parts, point chunks, tree chunks) as `(segment
     /// id, generation)`, ascending by id.
     pub fn segments(&self) -> Vec<(u64, u64)> {
-        let mut all: Vec<(u64, u64)> = Vec::with_capacity(self.parts.len());
-        for p in &self.parts {
-            all.push((p.segment_id(), p.segment.generation));
-            all.extend(p.chunks());
-            all.extend(p.tree_chunks().map(|(id, generation, _)| (id, generation)));
-        }
-        all.sort_unstable();
-        all
+        segments_of(self.parts.iter())
     }
 
-    /// How many segments the layer publishes.
-    pub fn segment_count(&self) -> usize {
-        self.parts.iter().map(|p| 1 + p.chunk_segments()).sum()
+    /// The segments of the parts that changed in the layer's last update, as
+    /// [`PublishedParts::segments`].
+    pub fn changed_segments(&self) -> Vec<(u64, u64)> {
+        segments_of(self.changed_parts())
     }
+}
 
-    /// The layer's segment ids, ascending: equal shapes mean the same segments.
-    pub fn shape(&self) -> Vec<u64> {
-        self.segments().into_iter().map(|(id, _)| id).collect()
+/// The segments of `parts` (each part's own and its chunks), ascending by id.
+fn segments_of<'a, 'c: 'a>(parts: impl Iterator<Item = &'a PublishedLayer<'c>>) -> Vec<(u64, u64)> {
+    let mut all: Vec<(u64, u64)> = Vec::new();
+    for p in parts {
+        all.push((p.segment_id(), p.segment.generation));
+        all.extend(p.chunks());
+        all.extend(p.tree_chunks().map(|(id, generation, _)| (id, generation)));
     }
+    all.sort_unstable();
+    all
 }
 
 impl PublishedLayer<'_> {

@@ -12,7 +12,6 @@
 //! against fresh builds under random mutations, and the published parts against the
 //! live graph's answers.
 
-use super::part_patch::Cached;
 use super::parts::{LayerParts, PartRows, PublishedParts};
 use crate::bytes::{SegmentBytes, archive};
 use crate::graph::Layer;
@@ -206,8 +205,7 @@ impl SegmentCache {
             self.part_rows.is_none(),
             "a cache that splits layers into parts"
         );
-        let parts = self.update(graph, layer);
-        let cached = &mut parts.parts[0].cached;
+        let cached = self.update(graph, layer).first_inline();
         cached
             .chunks
             .build_stale_node_trees(graph, &mut cached.segment, 0);
@@ -230,15 +228,7 @@ impl SegmentCache {
     ) -> PublishedParts<'_> {
         let (chunk_len, tree_min) = (self.point_chunk_len, self.tree_chunk_min_points);
         let parts = self.update(graph, layer);
-        for part in &mut parts.parts {
-            let cached = &mut part.cached;
-            cached
-                .chunks
-                .build_stale_node_trees(graph, &mut cached.segment, tree_min);
-            cached
-                .chunks
-                .publish_form(&mut cached.segment, chunk_len, tree_min);
-        }
+        parts.publish_form(graph, chunk_len, tree_min);
         let extra = extra_segments(parts);
         self.extra_segments += extra;
         PublishedParts::new(&self.layers[&layer])
@@ -265,31 +255,25 @@ impl SegmentCache {
         if let Some(p) = removed.as_deref() {
             self.extra_segments -= extra_segments(p);
         }
-        let mut kept = removed.filter(|p| p.incarnation == incarnation);
-        let numbers_before = kept.as_ref().map(|p| p.numbers());
-        if let Some(p) = kept.as_mut() {
-            for part in &mut p.parts {
-                let Cached {
-                    segment, chunks, ..
-                } = &mut *part.cached;
-                chunks.restore(segment);
-            }
-        }
+        let kept = removed.filter(|p| p.incarnation == incarnation);
         let parts = match kept {
             Some(p) if p.generation == generation => p,
             Some(p) => {
                 let changes = graph.take_layer_changes(layer);
-                p.patched(graph, layer, changes, self.part_rows)
-                    .unwrap_or_else(|| LayerParts::full(graph, layer, self.part_rows))
+                let parts = p
+                    .patched(graph, layer, changes, self.part_rows)
+                    .unwrap_or_else(|| LayerParts::full(graph, layer, self.part_rows));
+                if parts.reshaped {
+                    self.parts_generation += 1;
+                }
+                parts
             }
             None => {
                 graph.take_layer_changes(layer);
+                self.parts_generation += 1;
                 LayerParts::full(graph, layer, self.part_rows)
             }
         };
-        if numbers_before.as_ref() != Some(&parts.numbers()) {
-            self.parts_generation += 1;
-        }
         self.layers.entry(layer).insert_entry(parts).into_mut()
     }
 
@@ -443,5 +427,5 @@ fn refresh_entry(
 /// The segments a cached layer publishes beyond one (none unless it is in published form
 /// or split into parts).
 fn extra_segments(p: &LayerParts) -> usize {
-    PublishedParts::new(p).segment_count() - 1
+    p.segment_count() - 1
 }

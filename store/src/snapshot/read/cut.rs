@@ -137,13 +137,6 @@ fn unordered<T, K: Ord + std::fmt::Debug>(
     ))
 }
 
-/// The range of the elements of `given` (sorted by `key`) with key `k`.
-fn run<T>(given: &[T], k: (u32, u32), key: impl Fn(&T) -> (u32, u32)) -> [u32; 2] {
-    let start = given.partition_point(|t| key(t) < k);
-    let end = start + given[start..].partition_point(|t| key(t) == k);
-    [start as u32, end as u32]
-}
-
 impl<'a> ArchivedScene<'a> {
     /// Joins a validated manifest with its validated part segments (ascending by
     /// (layer id, part number), as segment ids sort them), the validated point chunks of
@@ -360,12 +353,31 @@ impl<'a> ArchivedScene<'a> {
             .or_else(|| unordered("tree chunks", &trees, tree_key));
         let mut parts = Vec::with_capacity(given.len());
         let mut part_start = Vec::with_capacity(structure.layers.len() + 1);
+        // Both ascend by layer: each layer's given parts are one run of `given`, found by
+        // walking along; within it a part is found by its number (the run ascends by
+        // number), directly when the numbers come in id order.
+        let mut run_start = 0;
         for m in structure.layers.iter() {
             part_start.push(parts.len() as u32);
             let layer = m.id.to_native();
-            for number in u32s(&m.parts) {
-                match find(given, (layer, *number), part_key) {
-                    Some(at) => parts.push(given[at]),
+            while given
+                .get(run_start)
+                .is_some_and(|p| p.layer.to_native() < layer)
+            {
+                run_start += 1;
+            }
+            let run_len = given[run_start..]
+                .iter()
+                .take_while(|p| p.layer == layer)
+                .count();
+            let layer_run = &given[run_start..run_start + run_len];
+            for (k, number) in u32s(&m.parts).iter().enumerate() {
+                let found = match layer_run.get(k) {
+                    Some(p) if p.part == *number => Some(*p),
+                    _ => find(layer_run, (layer, *number), part_key).map(|at| layer_run[at]),
+                };
+                match found {
+                    Some(p) => parts.push(p),
                     None => {
                         problem.get_or_insert_with(|| {
                             format!("layer {layer} lists part {number}, not given")
@@ -373,17 +385,26 @@ impl<'a> ArchivedScene<'a> {
                     }
                 }
             }
+            run_start += run_len;
         }
         part_start.push(parts.len() as u32);
         let chunk_ranges = if chunks.is_empty() {
             Vec::new()
         } else {
+            // The runs of chunks by (layer, part), then each part's run among them.
+            let mut runs: Vec<((u32, u32), [u32; 2])> = Vec::new();
+            for (i, c) in chunks.iter().enumerate() {
+                let key = (c.layer.to_native(), c.part.to_native());
+                match runs.last_mut() {
+                    Some((k, range)) if *k == key => range[1] = i as u32 + 1,
+                    _ => runs.push((key, [i as u32, i as u32 + 1])),
+                }
+            }
             parts
                 .iter()
                 .map(|p| {
-                    run(&chunks, part_key(p), |c| {
-                        (c.layer.to_native(), c.part.to_native())
-                    })
+                    runs.binary_search_by_key(&part_key(p), |(k, _)| *k)
+                        .map_or([0, 0], |at| runs[at].1)
                 })
                 .collect()
         };
