@@ -12,11 +12,10 @@
 //!   0600 once initialised, so only processes of the writer's user can open it. A reader
 //!   maps the payload read-only. The writer keeps its read-write mapping, and any process
 //!   of the same user can open a segment file read-write.
-//! * **What validation guarantees.** Every manifest and every newly received layer segment
-//!   passes rkyv's bytecheck and the store's consistency pass before any query touches it
-//!   (a manifest equal byte for byte to the last accepted one but for its per-cut integer
-//!   fields, every value of which is valid, is taken as checked; see
-//!   [`ygg_store::snapshot::CheckedManifest`]):
+//! * **What validation guarantees.** Every manifest and every newly received segment (a
+//!   layer's part, a point or tree chunk, the structure) passes rkyv's bytecheck and the
+//!   store's consistency pass before any query touches it (a segment the reader accepted
+//!   before, the very same bytes, is not checked again):
 //!   whatever bytes were in shared memory at that moment, queries stay in bounds and
 //!   answer on a consistent cut. A corrupt or hostile segment is rejected with
 //!   [`SceneReceiveError::Invalid`]; the previous snapshot stays current.
