@@ -399,7 +399,7 @@ void writer_and_reader(const std::string& scene) {
   std::size_t n = 0;
   EXPECT_OK(ygg_graph_node_count(g, &n));  // a failed create leaves the graph with the caller
   EXPECT(n == 8);
-  ygg_writer_options options{4, 4096, 0};
+  ygg_writer_options options{4, 4096, 0, 0};
   EXPECT_OK(ygg_writer_create(scene.c_str(), g, &options, &writer));
   EXPECT_STATUS(ygg_graph_node_count(g, &n), YGG_STATUS_INVALID_HANDLE);  // moved into the writer
   ygg_graph* other = build_graph();
@@ -426,7 +426,7 @@ void writer_and_reader(const std::string& scene) {
 
   // A graph past the writer's layer bound is refused at publish, naming the bound.
   ygg_graph* three_layers = build_graph();
-  ygg_writer_options bounded{0, 0, 2};
+  ygg_writer_options bounded{0, 0, 2, 0};
   ygg_writer* bounded_writer = nullptr;
   EXPECT_OK(ygg_writer_create((scene + "-bound").c_str(), three_layers, &bounded, &bounded_writer));
   EXPECT_STATUS(ygg_writer_publish(bounded_writer, &report), YGG_STATUS_PUBLISH);
