@@ -1,6 +1,6 @@
 """Layers split into parts (row chunks): a Python reader of a Python writer that appends,
 edits, nests and removes rows of a layer of many parts answers every query as the live
-graph does, and an append resends one part, not the layer."""
+graph does, and an append resends a few parts, not the layer."""
 import numpy as np
 
 import yggdrasil
@@ -54,11 +54,12 @@ def test_a_reader_of_a_layer_in_many_parts_answers_as_the_live_graph(scene_name)
             scene = reader.wait_next(10)
             assert scene is not None and scene.generation == report["generation"]
             assert answers(scene, places, probes) == answers(g.snapshot(), places, probes), step
-        # Hundreds of poses in parts: an append sends one part of at most a few dozen rows.
+        # Hundreds of poses in parts: an append sends its part (and perhaps a merge of cold
+        # parts), not the layer.
         assert report["segments"] > 10, report
         g.add_node(next_pose, poses_layer)
         g.set_geometry(next_pose, np.array([[1.0, 1.0, 1.0]], dtype=np.float32))
         report = writer.publish()
-        assert report["parts_sent"] == 1, report
+        assert 1 <= report["parts_sent"] and 2 * report["parts_sent"] < report["segments"], report
         scene = reader.wait_next(10)
         assert scene.nearest_nodes([1.0, 1.0, 1.0], 1, layer="POSES")[0][0] == next_pose

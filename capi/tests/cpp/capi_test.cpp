@@ -496,7 +496,7 @@ void writer_and_reader(const std::string& scene) {
 
 // A layer split into parts of 4 rows (`part_rows`), growing by appends, edited in the middle
 // and trimmed at the front: a C reader's answers equal those of the live graph's snapshot,
-// and an append resends one part.
+// and an append resends a few parts, not the layer.
 void parts_of_a_growing_layer(const std::string& scene) {
   ygg_graph* g = nullptr;
   EXPECT_OK(ygg_graph_create(&g));
@@ -558,7 +558,9 @@ void parts_of_a_growing_layer(const std::string& scene) {
   EXPECT(report.segments > 10);  // the poses lie in many parts
   append(1);
   EXPECT_OK(ygg_writer_publish(writer, &report));
-  EXPECT(report.parts_sent == 1 && report.layers_sent == 1);
+  // The new node's part and its predecessor's (the odometry edge), perhaps a merge of cold
+  // parts: a few parts, not the layer.
+  EXPECT(report.layers_sent == 1 && report.parts_sent >= 1 && 2 * report.parts_sent < report.segments);
   if (reader != nullptr) EXPECT_OK(ygg_reader_destroy(reader));
   EXPECT_OK(ygg_writer_destroy(writer));
 }
