@@ -55,8 +55,9 @@ def test_a_reader_of_a_layer_in_many_parts_answers_as_the_live_graph(scene_name)
                     g.add_edge(next_pose - 1, next_pose, "odometry")
                 next_pose += 1
             if step % 10 == 5:
-                # An edit in the middle of the layer, and the oldest poses dropped.
-                g.set_geometry(10_100, np.array([[50.0, 5.0, 0.0]], dtype=np.float32))
+                # An edit in the middle of the layer (a pose the removals below have not
+                # reached), and the oldest poses dropped.
+                g.set_geometry(next_pose - 200, np.array([[50.0, 5.0, 0.0]], dtype=np.float32))
                 for old in range(10_000 + (step - 5) * 8, 10_000 + (step + 5) * 8):
                     if g.snapshot().has_node(old):
                         g.remove_node(old)
