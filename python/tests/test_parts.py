@@ -57,7 +57,7 @@ def test_a_reader_of_a_layer_in_many_parts_answers_as_the_live_graph(scene_name)
             if step % 10 == 5:
                 # An edit in the middle of the layer (a pose the removals below have not
                 # reached), and the oldest poses dropped.
-                g.set_geometry(next_pose - 200, np.array([[50.0, 5.0, 0.0]], dtype=np.float32))
+                g.set_geometry(next_pose - 30, np.array([[50.0, 5.0, 0.0]], dtype=np.float32))
                 for old in range(10_000 + (step - 5) * 8, 10_000 + (step + 5) * 8):
                     if g.snapshot().has_node(old):
                         g.remove_node(old)
