@@ -9,8 +9,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
 use ygg_transport::run_files::{
-    files_below, is_dead_run_file, prefix_files, prefix_leftovers, remove_files, run_prefix,
-    stale_run_files,
+    clean_up_prefix, files_below, is_dead_run_file, prefix_files, prefix_leftovers, remove_files,
+    run_prefix, stale_run_files,
 };
 use ygg_transport::service::{ENV_IOX2_PREFIX, ICEORYX2_ROOT};
 
@@ -139,16 +139,7 @@ impl TestScene {
     /// Once every process of the scene has exited: removes every file of the prefix and
     /// describes the ones left behind besides `global_mgmt` (`None` when there were none).
     pub fn clean_up(&self) -> Option<String> {
-        let left = self.leftovers();
-        self.remove_all();
-        (!left.is_empty()).then(|| {
-            let first: Vec<String> = left
-                .iter()
-                .take(3)
-                .map(|p| p.display().to_string())
-                .collect();
-            format!("{}: {} files ({})", self.name, left.len(), first.join(", "))
-        })
+        clean_up_prefix(&self.name, &self.prefix)
     }
 
     /// Removes every file of this prefix (used after a failed test, and for `global_mgmt`).

@@ -76,6 +76,22 @@ pub fn remove_files(paths: impl IntoIterator<Item = PathBuf>) -> usize {
         .count()
 }
 
+/// Once every process of the run of `name` has exited: removes every file of `prefix` and
+/// describes the ones left behind besides iceoryx2's `global_mgmt` counter (kept by
+/// design; `None` when there were none).
+pub fn clean_up_prefix(name: &str, prefix: &str) -> Option<String> {
+    let left = prefix_leftovers(prefix);
+    remove_files(prefix_files(prefix));
+    (!left.is_empty()).then(|| {
+        let first: Vec<String> = left
+            .iter()
+            .take(3)
+            .map(|p| p.display().to_string())
+            .collect();
+        format!("{name}: {} files ({})", left.len(), first.join(", "))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

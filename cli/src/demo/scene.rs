@@ -5,9 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use ygg_transport::run_files::{
-    prefix_files, prefix_leftovers, remove_files, run_prefix, stale_run_files,
-};
+use ygg_transport::run_files::{clean_up_prefix, remove_files, run_prefix, stale_run_files};
 use ygg_transport::service::ENV_IOX2_PREFIX;
 
 /// The scene name and iceoryx2 prefix of one run.
@@ -44,16 +42,7 @@ impl DemoScene {
     /// describes the ones left behind besides iceoryx2's `global_mgmt` counter (kept by
     /// design; `None` when there were none).
     pub fn clean_up(&self) -> Option<String> {
-        let left = prefix_leftovers(&self.prefix);
-        remove_files(prefix_files(&self.prefix));
-        (!left.is_empty()).then(|| {
-            let first: Vec<String> = left
-                .iter()
-                .take(3)
-                .map(|p| p.display().to_string())
-                .collect();
-            format!("{}: {} files ({})", self.name, left.len(), first.join(", "))
-        })
+        clean_up_prefix(&self.name, &self.prefix)
     }
 }
 
