@@ -293,6 +293,8 @@ impl SceneWriter {
             layers_unchanged: layer_count - changed.len(),
             ..PublishReport::default()
         };
+        // Every segment the loop looks at, sent or not: the entries a patched cut updates.
+        let mut looked_at = Vec::new();
         for layer in &changed {
             let published = self.segments.published(*layer).expect("brought up to date");
             report.layers_sent += 1;
@@ -305,6 +307,7 @@ impl SceneWriter {
             };
             for part in parts {
                 let id = part.segment_id();
+                looked_at.push((id, part.segment.generation));
                 if self.publisher.layer_generation(id) != Some(part.segment.generation) {
                     let len = part.segment.archived_len();
                     self.publisher
@@ -315,6 +318,7 @@ impl SceneWriter {
                     report.bytes_sent += len;
                 }
                 for (index, (id, chunk_generation)) in part.chunks().enumerate() {
+                    looked_at.push((id, chunk_generation));
                     if self.publisher.layer_generation(id) != Some(chunk_generation) {
                         let chunk = part.chunk(index);
                         let len = chunk.archived_len();
@@ -329,6 +333,7 @@ impl SceneWriter {
                     }
                 }
                 for (id, tree_generation, chunk) in part.tree_chunks() {
+                    looked_at.push((id, tree_generation));
                     if self.publisher.layer_generation(id) == Some(tree_generation) {
                         continue;
                     }
@@ -346,30 +351,27 @@ impl SceneWriter {
         }
         let entries = match last {
             Some(mut cut) if !reshaped => {
-                self.patch_entries(&mut cut.entries, &changed);
+                patch_entries(&mut cut.entries, &looked_at);
                 cut.entries
             }
             _ => self.cut_entries(),
         };
         let generation = self.generation + 1;
-        let len = self
-            .segments
-            .manifest_bytes(
-                &self.graph,
-                generation,
-                incremental.then_some(changed.as_slice()),
-            )
-            .len();
-        let (cut_structure, structure_bytes) = self.segments.structure().expect("just built");
-        let structure_generation = cut_structure.generation;
+        let cut = self.segments.manifest_bytes(
+            &self.graph,
+            generation,
+            incremental.then_some(changed.as_slice()),
+        );
+        let (manifest, len) = (cut.manifest, cut.manifest.len());
+        let structure_generation = cut.structure.generation;
         if self.publisher.layer_generation(STRUCTURE_SEGMENT_ID) != Some(structure_generation) {
-            let structure_len = structure_bytes.len();
+            let structure_len = cut.structure_bytes.len();
             self.publisher.try_publish_layer(
                 STRUCTURE_SEGMENT_ID,
                 structure_generation,
                 structure_len,
                 |buf| {
-                    buf[..structure_len].copy_from_slice(structure_bytes);
+                    buf[..structure_len].copy_from_slice(cut.structure_bytes);
                     Ok::<(), SnapshotError>(())
                 },
             )?;
@@ -387,9 +389,6 @@ impl SceneWriter {
                 },
             ),
         }
-        let manifest =
-            self.segments
-                .manifest_bytes(&self.graph, generation, incremental.then_some(&[][..]));
         self.publisher
             .try_publish_manifest(generation, &entries, len, |buf| {
                 buf[..len].copy_from_slice(manifest);
@@ -411,19 +410,6 @@ impl SceneWriter {
             entries,
         });
         Ok(report)
-    }
-
-    /// Sets the generations of the changed layers' parts and chunks in the last cut's
-    /// entries (ascending by segment id; the layers' shapes are unchanged).
-    fn patch_entries(&self, entries: &mut [ManifestEntry], changed: &[LayerId]) {
-        for layer in changed {
-            let published = self.segments.published(*layer).expect("brought up to date");
-            for (id, generation) in published.changed_segments() {
-                if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
-                    entries[i].generation = generation;
-                }
-            }
-        }
     }
 
     /// The entries of the cut, built afresh from every layer (ascending by segment id:
@@ -448,7 +434,21 @@ impl SceneWriter {
             self.publisher.retire_layer(*gone);
         }
         self.published_segments = live;
+        let graph = &self.graph;
+        self.published_generation
+            .retain(|layer, _| graph.layer_generation(*layer).is_some());
         entries
+    }
+}
+
+/// Sets the generation of each segment of `segments` (id, generation) in the last cut's
+/// entries (ascending by segment id; the layers' shapes are unchanged, so every id is
+/// there).
+fn patch_entries(entries: &mut [ManifestEntry], segments: &[(u64, u64)]) {
+    for &(id, generation) in segments {
+        if let Ok(i) = entries.binary_search_by_key(&id, |e| e.layer_id) {
+            entries[i].generation = generation;
+        }
     }
 }
 

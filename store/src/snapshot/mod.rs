@@ -57,7 +57,8 @@ pub use chunking::{
     part_segment_id, segment_layer_part, tree_chunk_segment_id,
 };
 pub use publish::{
-    ArchivedGraph, PointChunkSource, PublishedLayer, PublishedParts, SegmentCache, TreeChunkSource,
+    ArchivedGraph, CutBytes, PointChunkSource, PublishedLayer, PublishedParts, SegmentCache,
+    TreeChunkSource,
 };
 pub use read::{
     ArchivedNodeRef, ArchivedScene, FILE_MAGIC, KnownParts, SnapshotFile, check_layer,

@@ -8,7 +8,7 @@ use super::chunk_source::{PointChunkSource, TreeChunkSource};
 use crate::index::{KdTree, build_tree};
 use crate::snapshot::chunking::{
     WITHHELD_TREE_MAX_MEMBERS, chunk_count, chunk_range, chunk_segment_id, has_tree_chunk,
-    is_chunked, tree_chunk_segment_id, withholds_node_tree,
+    is_chunked, part_segment_id, tree_chunk_segment_id, withholds_node_tree,
 };
 use crate::snapshot::schema::{LayerSegment, NodeIndexSegment, PointChunkRef, TreeChunkRef};
 use crate::{LayerId, NodeId, Point, SceneGraph};
@@ -370,6 +370,12 @@ impl<'c> PublishedLayer<'c> {
             tree,
             node_trees: &state.node_trees_aside,
         }
+    }
+
+    /// The segment id of this part.
+    pub fn segment_id(&self) -> u64 {
+        part_segment_id(LayerId(self.segment.layer), self.segment.part)
+            .expect("a part's number fits its segment id")
     }
 
     /// The trees that travel as tree chunks, ascending by slot (the layer index's base

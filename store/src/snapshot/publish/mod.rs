@@ -14,4 +14,4 @@ pub use archive::ArchivedGraph;
 pub use chunk_source::{PointChunkSource, TreeChunkSource};
 pub use chunk_state::PublishedLayer;
 pub use parts::PublishedParts;
-pub use segment_cache::SegmentCache;
+pub use segment_cache::{CutBytes, SegmentCache};

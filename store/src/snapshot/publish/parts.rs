@@ -26,7 +26,6 @@
 use super::chunk_state::PublishedLayer;
 use super::part_patch::{Cached, patched};
 use crate::graph::LayerChanges;
-use crate::snapshot::chunking::part_segment_id;
 use crate::{LayerId, NodeId, SceneGraph};
 
 /// How a publishing writer splits layers into parts.
@@ -434,32 +433,13 @@ impl<'c> PublishedParts<'c> {
     /// Every segment the layer publishes (parts, point chunks, tree chunks) as `(segment
     /// id, generation)`, ascending by id.
     pub fn segments(&self) -> Vec<(u64, u64)> {
-        segments_of(self.parts.iter())
-    }
-
-    /// The segments of the parts that changed in the layer's last update, as
-    /// [`PublishedParts::segments`].
-    pub fn changed_segments(&self) -> Vec<(u64, u64)> {
-        segments_of(self.changed_parts())
-    }
-}
-
-/// The segments of `parts` (each part's own and its chunks), ascending by id.
-fn segments_of<'a, 'c: 'a>(parts: impl Iterator<Item = &'a PublishedLayer<'c>>) -> Vec<(u64, u64)> {
-    let mut all: Vec<(u64, u64)> = Vec::new();
-    for p in parts {
-        all.push((p.segment_id(), p.segment.generation));
-        all.extend(p.chunks());
-        all.extend(p.tree_chunks().map(|(id, generation, _)| (id, generation)));
-    }
-    all.sort_unstable();
-    all
-}
-
-impl PublishedLayer<'_> {
-    /// The segment id of this part.
-    pub fn segment_id(&self) -> u64 {
-        part_segment_id(LayerId(self.segment.layer), self.segment.part)
-            .expect("a part's number fits its segment id")
+        let mut all: Vec<(u64, u64)> = Vec::new();
+        for p in &self.parts {
+            all.push((p.segment_id(), p.segment.generation));
+            all.extend(p.chunks());
+            all.extend(p.tree_chunks().map(|(id, generation, _)| (id, generation)));
+        }
+        all.sort_unstable();
+        all
     }
 }

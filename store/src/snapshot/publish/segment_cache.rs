@@ -71,6 +71,19 @@ impl std::fmt::Debug for SegmentCache {
     }
 }
 
+/// What a publish sends besides its parts ([`SegmentCache::manifest_bytes`]): the
+/// archived manifest, and the structure it names with its archive.
+#[derive(Debug, Clone, Copy)]
+pub struct CutBytes<'c> {
+    /// The archived manifest.
+    pub manifest: &'c [u8],
+    /// The structure the manifest names (its generation in
+    /// [`Structure::generation`](crate::snapshot::Structure::generation)).
+    pub structure: &'c Structure,
+    /// The structure archived: a segment of its own, sent when its generation is new.
+    pub structure_bytes: &'c [u8],
+}
+
 /// The last manifest with what it was built from.
 struct CachedManifest {
     structure_generation: u64,
@@ -293,18 +306,22 @@ impl SegmentCache {
     ///
     /// `changed`, if given, lists every layer whose generation changed since the last
     /// call: with the structure and terms unchanged, only their entries are brought up to
-    /// date (O(changed), not O(layers)).
+    /// date (O(changed), not O(layers)). Comes with the structure the manifest names.
     pub fn manifest_bytes(
         &mut self,
         graph: &SceneGraph,
         generation: u64,
         changed: Option<&[LayerId]>,
-    ) -> &[u8] {
+    ) -> CutBytes<'_> {
         let cached = self.update_manifest(graph, generation, changed);
         let archived = cached
             .archived
             .get_or_insert_with(|| ManifestBytes::new(&cached.manifest));
-        &archived.bytes
+        CutBytes {
+            manifest: &archived.bytes,
+            structure: &cached.structure,
+            structure_bytes: &cached.structure_bytes,
+        }
     }
 
     /// The structure the last manifest ([`SegmentCache::manifest`],
