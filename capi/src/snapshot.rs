@@ -83,7 +83,7 @@ impl YggSnapshot {
 
     fn new(source: SnapshotSource) -> Self {
         let view = SnapshotView::new(source, |source| match source {
-            SnapshotSource::Live(s) => s.view(),
+            SnapshotSource::Live(s) => s.view().clone(),
             SnapshotSource::File(f) => f.view(),
         });
         YggSnapshot {

@@ -28,7 +28,7 @@ impl SnapshotSource {
     fn view(&self) -> ArchivedScene<'_> {
         match self {
             SnapshotSource::File(f) => f.view(),
-            SnapshotSource::Live(s) => s.view(),
+            SnapshotSource::Live(s) => s.view().clone(),
         }
     }
 

@@ -29,9 +29,9 @@ use std::time::Duration;
 use ygg_store::SnapshotError;
 use ygg_store::snapshot::{
     ArchivedScene, KnownParts, SegmentBytes, chunk_unchecked, is_chunk_segment_id,
-    is_part_segment_id, is_structure_segment_id, is_tree_chunk_segment_id, layer_unchecked,
-    manifest_unchecked, segment_layer_part, structure_unchecked, tree_chunk_unchecked,
-    validate_chunk, validate_layer, validate_manifest, validate_structure, validate_tree_chunk,
+    is_structure_segment_id, is_tree_chunk_segment_id, layer_unchecked, segment_layer_part,
+    structure_unchecked, tree_chunk_unchecked, validate_chunk, validate_layer, validate_manifest,
+    validate_structure, validate_tree_chunk,
 };
 use ygg_transport::{
     ReaderOpenError, ReceiveError, SegmentSubscriber, Snapshot, SubscriberBuilder, WriterStatus,
@@ -62,8 +62,13 @@ pub enum SceneReceiveError {
 /// is dropped. Query it through [`SceneSnapshot::view`].
 #[derive(Clone)]
 pub struct SceneSnapshot {
+    cut: Arc<JoinedCut>,
+}
+
+/// The bytes of an accepted cut: the transport's samples and, in copy mode, the private
+/// copies that were validated and are queried instead.
+struct CutBytes {
     inner: Arc<Snapshot>,
-    /// In copy mode: the bytes that were validated and are queried instead of `inner`'s.
     private: Option<Arc<PrivateCut>>,
 }
 
@@ -74,9 +79,9 @@ struct PrivateCut {
     layers: Vec<Arc<SegmentBytes>>,
 }
 
-impl SceneSnapshot {
-    /// The bytes queried: the manifest's and each segment's (layers, point chunks, then
-    /// tree chunks), in `Snapshot::layers` order.
+impl CutBytes {
+    /// The bytes queried: the manifest's and each segment's (parts, point chunks, tree
+    /// chunks, then the structure), in `Snapshot::layers` order.
     fn bytes(&self) -> (&[u8], Vec<&[u8]>) {
         match &self.private {
             Some(p) => (&p.manifest, p.layers.iter().map(|l| &l[..]).collect()),
@@ -86,73 +91,33 @@ impl SceneSnapshot {
             ),
         }
     }
-
-    /// How many of the snapshot's segments are parts and how many point chunks: the
-    /// rest, sorted after them by segment id, are tree chunks and, last, the structure.
-    fn segment_counts(&self) -> (usize, usize) {
-        let (mut parts, mut points) = (0, 0);
-        for (entry, _) in self.inner.layers() {
-            if is_part_segment_id(entry.layer_id) {
-                parts += 1;
-            } else if is_chunk_segment_id(entry.layer_id)
-                && !is_tree_chunk_segment_id(entry.layer_id)
-            {
-                points += 1;
-            } else {
-                break;
-            }
-        }
-        (parts, points)
-    }
 }
 
+self_cell::self_cell!(
+    /// A cut's bytes and the view `SceneReader::accept` joined over them once, which
+    /// every query of the cut reuses.
+    struct JoinedCut {
+        owner: CutBytes,
+        #[covariant]
+        dependent: ArchivedScene,
+    }
+);
+
 impl SceneSnapshot {
-    /// The scene as a [`ygg_store::SceneView`]: every query of the store runs on it.
-    pub fn view(&self) -> ArchivedScene<'_> {
-        // SAFETY: a `SceneSnapshot` is only built by `SceneReader::accept`, after the
-        // manifest bytes of `self.inner` passed `validate_manifest`, its structure's
-        // `validate_structure`, and every part's bytes `validate_layer` (each chunk's
-        // `validate_chunk` or `validate_tree_chunk`; cached per identical address, length
-        // and identity). `self.inner` keeps those exact samples mapped and unchanged.
-        let (manifest, segments) = self.bytes();
-        // SAFETY: see above; in copy mode the bytes are the private copies that were
-        // validated, which nothing but this reader can reach.
-        let manifest = unsafe { manifest_unchecked(manifest) };
-        let (part_count, point_count) = self.segment_counts();
-        let (structure, segments) = segments
-            .split_last()
-            .expect("an accepted cut has a structure");
-        // SAFETY: as above, the structure's bytes passed `validate_structure`.
-        let structure = unsafe { structure_unchecked(structure) };
-        let (layers, chunks) = segments.split_at(part_count);
-        let (chunks, trees) = chunks.split_at(point_count);
-        let layers = layers
-            .iter()
-            // SAFETY: as above, each part's bytes were validated before `accept` returned.
-            .map(|bytes| unsafe { layer_unchecked(bytes) })
-            .collect();
-        let chunks = chunks
-            .iter()
-            // SAFETY: as above, each point chunk's bytes passed `validate_chunk`.
-            .map(|bytes| unsafe { chunk_unchecked(bytes) })
-            .collect();
-        let trees = trees
-            .iter()
-            // SAFETY: as above, each tree chunk's bytes passed `validate_tree_chunk`.
-            .map(|bytes| unsafe { tree_chunk_unchecked(bytes) })
-            .collect();
-        // `accept` joined this cut (`ArchivedScene::rejoin`).
-        ArchivedScene::new_prechecked(manifest, structure, layers, chunks, trees)
+    /// The scene as a [`ygg_store::SceneView`]: every query of the store runs on it. The
+    /// view was joined once, when the reader accepted the cut; this call costs nothing.
+    pub fn view(&self) -> &ArchivedScene<'_> {
+        self.cut.borrow_dependent()
     }
 
     /// The snapshot generation.
     pub fn generation(&self) -> u64 {
-        self.inner.generation()
+        self.raw().generation()
     }
 
     /// The transport snapshot (raw bytes per layer).
     pub fn raw(&self) -> &Snapshot {
-        &self.inner
+        &self.cut.borrow_owner().inner
     }
 }
 
@@ -313,7 +278,7 @@ impl SceneReader {
         let current = self
             .current
             .as_ref()
-            .is_some_and(|c| Arc::ptr_eq(&c.inner, &snap));
+            .is_some_and(|c| Arc::ptr_eq(&c.cut.borrow_owner().inner, &snap));
         // The weak pointer keeps the refused cut's allocation, so its address names it.
         if current || Weak::ptr_eq(&self.refused, &Arc::downgrade(&snap)) {
             return Ok(self.current.clone());
@@ -331,146 +296,25 @@ impl SceneReader {
         &mut self,
         snap: Arc<Snapshot>,
     ) -> Result<Option<SceneSnapshot>, SceneReceiveError> {
-        let accepted = SceneSnapshot {
+        let bytes = CutBytes {
             private: self.private_cut(&snap),
             inner: snap,
         };
-        let snap = &accepted.inner;
+        let generation = bytes.inner.generation();
         let invalid = |source| SceneReceiveError::Invalid {
             scene: self.subscriber.scene().to_owned(),
-            generation: snap.generation(),
+            generation,
             source,
         };
-        let (manifest_bytes, segment_bytes) = accepted.bytes();
-        let manifest = validate_manifest(manifest_bytes, "manifest").map_err(invalid)?;
-        let mut structure = None;
-        let mut same_structure = false;
-        let mut layers = Vec::with_capacity(snap.layer_count());
-        let mut known_layers = Vec::with_capacity(manifest.layers.len());
-        let mut part_known = Vec::with_capacity(snap.layer_count());
-        let mut chunks = Vec::new();
-        let mut trees = Vec::new();
-        let mut identities = Vec::with_capacity(snap.layer_count());
-        let mut newly = 0;
-        // Both lists ascend by segment id: one walk finds each segment's previous identity.
-        let mut previous = self.validated.iter().peekable();
-        for ((entry, _), bytes) in snap.layers().zip(segment_bytes) {
-            let identity = (
-                snap.session(),
-                entry.generation,
-                bytes.as_ptr() as usize,
-                bytes.len(),
-            );
-            let known = loop {
-                match previous.peek() {
-                    Some((id, _)) if *id < entry.layer_id => {
-                        previous.next();
-                    }
-                    Some((id, seen)) => break *id == entry.layer_id && *seen == identity,
-                    None => break false,
-                }
-            };
-            let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
-            if structure.is_some() {
-                // Entries are sorted by id, so the structure comes last: the writer broke that.
-                return Err(invalid(SnapshotError::Inconsistent {
-                    what: what(),
-                    reason: "a segment listed after the structure".into(),
-                }));
-            } else if is_structure_segment_id(entry.layer_id) {
-                // A structure some accepted cut had was checked by its join.
-                same_structure = known;
-                structure = Some(if known {
-                    // SAFETY: these exact bytes (same address, length and identity) passed
-                    // `validate_structure` earlier, and the transport never changes a
-                    // published sample.
-                    unsafe { structure_unchecked(bytes) }
-                } else {
-                    validate_structure(bytes, &what()).map_err(invalid)?
-                });
-            } else if is_tree_chunk_segment_id(entry.layer_id) {
-                trees.push(if known {
-                    // SAFETY: these exact bytes (same address, length and identity) passed
-                    // `validate_tree_chunk` earlier, and the transport never changes a
-                    // published sample.
-                    unsafe { tree_chunk_unchecked(bytes) }
-                } else {
-                    validate_tree_chunk(bytes, &what()).map_err(invalid)?
-                });
-            } else if !trees.is_empty() {
-                // Entries are sorted by id, so tree chunks come last: the writer broke that.
-                return Err(invalid(SnapshotError::Inconsistent {
-                    what: what(),
-                    reason: "a layer or point chunk listed after tree chunks".into(),
-                }));
-            } else if is_chunk_segment_id(entry.layer_id) {
-                chunks.push(if known {
-                    // SAFETY: these exact bytes (same address, length and identity) passed
-                    // `validate_chunk` earlier, and the transport never changes a
-                    // published sample.
-                    unsafe { chunk_unchecked(bytes) }
-                } else {
-                    validate_chunk(bytes, &what()).map_err(invalid)?
-                });
-            } else if !chunks.is_empty() {
-                // Entries are sorted by id, so layers come first: the writer broke that.
-                return Err(invalid(SnapshotError::Inconsistent {
-                    what: what(),
-                    reason: "a layer segment listed after point chunks".into(),
-                }));
-            } else {
-                if let Some((layer, _)) = segment_layer_part(entry.layer_id) {
-                    part_known.push((layer.0, known));
-                }
-                layers.push(if known {
-                    // SAFETY: these exact bytes (same address, length and identity) passed
-                    // `validate_layer` earlier, and the transport never changes a
-                    // published sample.
-                    unsafe { layer_unchecked(bytes) }
-                } else {
-                    validate_layer(bytes, &what()).map_err(invalid)?
-                });
-            }
-            newly += usize::from(!known);
-            identities.push((entry.layer_id, identity));
-        }
-        let Some(structure) = structure else {
-            return Err(invalid(SnapshotError::Inconsistent {
-                what: "snapshot".into(),
-                reason: "the manifest names no structure segment".into(),
-            }));
-        };
-        // A layer is known when its entry and every one of its parts are as in the last
-        // accepted cut (parts and manifest entries both ascend by layer id).
-        let mut parts = part_known.iter().peekable();
-        for (at, m) in manifest.layers.iter().enumerate() {
-            let id = m.id.to_native();
-            let mut all_known = true;
-            while let Some(&&(layer, known)) = parts.peek() {
-                if layer > id {
-                    break;
-                }
-                all_known &= layer == id && known;
-                parts.next();
-            }
-            known_layers.push(all_known && same_structure && self.memo.knows_layer(at, m));
-        }
-        let known = KnownParts {
-            structure: same_structure,
-            layers: &known_layers,
-        };
-        ArchivedScene::rejoin(manifest, structure, layers, chunks, trees, known).map_err(
-            |reason| {
-                invalid(SnapshotError::Inconsistent {
-                    what: "snapshot".into(),
-                    reason,
-                })
-            },
-        )?;
-        self.memo
-            .remember(manifest, identities.iter().map(|(id, _)| *id));
-        self.validations += newly as u64;
-        self.validated = identities;
+        let mut joined = Joined::default();
+        let cut = JoinedCut::try_new(bytes, |bytes| {
+            join(bytes, &self.validated, &self.memo, &mut joined)
+        })
+        .map_err(invalid)?;
+        self.memo.remember(cut.borrow_dependent().manifest());
+        self.validations += joined.newly as u64;
+        self.validated = joined.identities;
+        let accepted = SceneSnapshot { cut: Arc::new(cut) };
         self.current = Some(accepted.clone());
         Ok(Some(accepted))
     }
@@ -499,6 +343,148 @@ impl SceneReader {
             layers,
         }))
     }
+}
+
+/// What a join learnt beside the view: each segment's identity, ascending by segment id,
+/// and how many segments it validated.
+#[derive(Default)]
+struct Joined {
+    identities: Vec<(u64, SegmentIdentity)>,
+    newly: usize,
+}
+
+/// Validates what is new in a cut (segments whose identity is not in `validated`, the
+/// last accepted cut's) and joins it, taking as checked what `memo` and `validated` say
+/// the last accepted cut had; `joined` learns the cut's identities.
+fn join<'b>(
+    bytes: &'b CutBytes,
+    validated: &[(u64, SegmentIdentity)],
+    memo: &JoinMemo,
+    joined: &mut Joined,
+) -> Result<ArchivedScene<'b>, SnapshotError> {
+    let snap = &bytes.inner;
+    let (manifest_bytes, segment_bytes) = bytes.bytes();
+    let manifest = validate_manifest(manifest_bytes, "manifest")?;
+    let mut structure = None;
+    let mut same_structure = false;
+    let mut layers = Vec::with_capacity(snap.layer_count());
+    let mut chunks = Vec::new();
+    let mut trees = Vec::new();
+    // Per layer id with a segment this cut does not share with the last accepted one.
+    let mut changed_layers = Vec::new();
+    joined.identities.reserve(snap.layer_count());
+    // Both lists ascend by segment id: one walk finds each segment's previous identity.
+    let mut previous = validated.iter().peekable();
+    for ((entry, _), bytes) in snap.layers().zip(segment_bytes) {
+        let identity = (
+            snap.session(),
+            entry.generation,
+            bytes.as_ptr() as usize,
+            bytes.len(),
+        );
+        let known = loop {
+            match previous.peek() {
+                Some((id, _)) if *id < entry.layer_id => {
+                    // A segment of the last cut that this one lacks: its layer changed.
+                    changed_layers.extend(segment_layer_part(*id).map(|(l, _)| l.0));
+                    previous.next();
+                }
+                Some((id, seen)) => break *id == entry.layer_id && *seen == identity,
+                None => break false,
+            }
+        };
+        let what = || format!("segment {} generation {}", entry.layer_id, entry.generation);
+        let inconsistent = |reason: &str| SnapshotError::Inconsistent {
+            what: what(),
+            reason: reason.into(),
+        };
+        if !known && let Some((layer, _)) = segment_layer_part(entry.layer_id) {
+            changed_layers.push(layer.0);
+        }
+        if structure.is_some() {
+            // Entries are sorted by id, so the structure comes last: the writer broke that.
+            return Err(inconsistent("a segment listed after the structure"));
+        } else if is_structure_segment_id(entry.layer_id) {
+            // A structure some accepted cut had was checked by its join.
+            same_structure = known;
+            structure = Some(if known {
+                // SAFETY: these exact bytes (same address, length and identity) passed
+                // `validate_structure` earlier, and the transport never changes a
+                // published sample.
+                unsafe { structure_unchecked(bytes) }
+            } else {
+                validate_structure(bytes, &what())?
+            });
+        } else if is_tree_chunk_segment_id(entry.layer_id) {
+            trees.push(if known {
+                // SAFETY: these exact bytes (same address, length and identity) passed
+                // `validate_tree_chunk` earlier, and the transport never changes a
+                // published sample.
+                unsafe { tree_chunk_unchecked(bytes) }
+            } else {
+                validate_tree_chunk(bytes, &what())?
+            });
+        } else if !trees.is_empty() {
+            // Entries are sorted by id, so tree chunks come last: the writer broke that.
+            return Err(inconsistent(
+                "a layer or point chunk listed after tree chunks",
+            ));
+        } else if is_chunk_segment_id(entry.layer_id) {
+            chunks.push(if known {
+                // SAFETY: these exact bytes (same address, length and identity) passed
+                // `validate_chunk` earlier, and the transport never changes a published
+                // sample.
+                unsafe { chunk_unchecked(bytes) }
+            } else {
+                validate_chunk(bytes, &what())?
+            });
+        } else if !chunks.is_empty() {
+            // Entries are sorted by id, so layers come first: the writer broke that.
+            return Err(inconsistent("a layer segment listed after point chunks"));
+        } else {
+            layers.push(if known {
+                // SAFETY: these exact bytes (same address, length and identity) passed
+                // `validate_layer` earlier, and the transport never changes a published
+                // sample.
+                unsafe { layer_unchecked(bytes) }
+            } else {
+                validate_layer(bytes, &what())?
+            });
+        }
+        joined.newly += usize::from(!known);
+        joined.identities.push((entry.layer_id, identity));
+    }
+    changed_layers.extend(previous.filter_map(|(id, _)| segment_layer_part(*id).map(|(l, _)| l.0)));
+    let Some(structure) = structure else {
+        return Err(SnapshotError::Inconsistent {
+            what: "snapshot".into(),
+            reason: "the manifest names no structure segment".into(),
+        });
+    };
+    // A layer is known when its segments are those of the last accepted cut (none new,
+    // none gone) and its entry is as there.
+    changed_layers.sort_unstable();
+    changed_layers.dedup();
+    let known_layers: Vec<bool> = manifest
+        .layers
+        .iter()
+        .enumerate()
+        .map(|(at, m)| {
+            same_structure
+                && changed_layers.binary_search(&m.id.to_native()).is_err()
+                && memo.knows_layer(at, m)
+        })
+        .collect();
+    let known = KnownParts {
+        structure: same_structure,
+        layers: &known_layers,
+    };
+    ArchivedScene::rejoin(manifest, structure, layers, chunks, trees, known).map_err(|reason| {
+        SnapshotError::Inconsistent {
+            what: "snapshot".into(),
+            reason,
+        }
+    })
 }
 
 /// `bytes` copied into private memory aligned as archives need.

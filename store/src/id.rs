@@ -155,17 +155,19 @@ pub(crate) fn first_non_finite(points: &[Point]) -> Option<usize> {
     points.iter().position(|p| !p.iter().all(|c| c.is_finite()))
 }
 
-/// The parts of two point lists that differ: `old` and `new` without their common
-/// prefix and suffix (points compared bit for bit). Moving one point of a node, or
-/// appending points to it, then costs index and box updates for those points only.
-pub(crate) fn changed_points<'o, 'n>(
+/// The parts of two point lists that differ: the length of their common prefix, then
+/// `old` and `new` without their common prefix and suffix (points compared bit for bit).
+/// Moving one point of a node, or appending points to it, then costs index and box
+/// updates for those points only.
+pub(crate) fn point_difference<'o, 'n>(
     old: &'o [Point],
     new: &'n [Point],
-) -> (&'o [Point], &'n [Point]) {
+) -> (usize, &'o [Point], &'n [Point]) {
     let (a, b): (&[[u32; 3]], &[[u32; 3]]) = (bytemuck::cast_slice(old), bytemuck::cast_slice(new));
     let prefix = prefix_len(a, b);
     let suffix = suffix_len(&a[prefix..], &b[prefix..]);
     (
+        prefix,
         &old[prefix..old.len() - suffix],
         &new[prefix..new.len() - suffix],
     )
@@ -228,32 +230,32 @@ mod tests {
     }
 
     #[test]
-    fn changed_points_trims_common_prefix_and_suffix() {
+    fn point_difference_trims_common_prefix_and_suffix() {
         let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
         let moved = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [2.0, 0.0, 0.0]];
-        assert_eq!(changed_points(&a, &moved), (&a[1..2], &moved[1..2]));
+        assert_eq!(point_difference(&a, &moved), (1, &a[1..2], &moved[1..2]));
         let appended = [a[0], a[1], a[2], [3.0, 0.0, 0.0]];
-        let (r, n) = changed_points(&a, &appended);
+        let (kept, r, n) = point_difference(&a, &appended);
         assert!(r.is_empty());
-        assert_eq!(n, &appended[3..]);
-        let (r, n) = changed_points(&a, &a);
-        assert!(r.is_empty() && n.is_empty());
-        let (r, n) = changed_points(&a, &[]);
-        assert_eq!((r.len(), n.len()), (3, 0));
+        assert_eq!((kept, n), (3, &appended[3..]));
+        let (kept, r, n) = point_difference(&a, &a);
+        assert!(kept == 3 && r.is_empty() && n.is_empty());
+        let (kept, r, n) = point_difference(&a, &[]);
+        assert_eq!((kept, r.len(), n.len()), (0, 3, 0));
         // Long lists: one point changed anywhere, compared block by block.
         let long: Vec<Point> = (0..200).map(|i| [i as f32, 0.0, 1.0]).collect();
         for at in [0, 31, 32, 33, 100, 167, 168, 199] {
             let mut moved = long.clone();
             moved[at][2] = 2.0;
             assert_eq!(
-                changed_points(&long, &moved),
-                (&long[at..=at], &moved[at..=at])
+                point_difference(&long, &moved),
+                (at, &long[at..=at], &moved[at..=at])
             );
         }
-        assert_eq!(changed_points(&long, &long[..150]).0, &long[150..]);
-        assert_eq!(changed_points(&long[50..], &long).1, &long[..50]);
+        assert_eq!(point_difference(&long, &long[..150]).1, &long[150..]);
+        assert_eq!(point_difference(&long[50..], &long).2, &long[..50]);
         // -0.0 and 0.0 differ bit for bit: both are updated.
         let signed = [[-0.0, 0.0, 0.0], a[1], a[2]];
-        assert_eq!(changed_points(&a, &signed).0.len(), 1);
+        assert_eq!(point_difference(&a, &signed).1.len(), 1);
     }
 }

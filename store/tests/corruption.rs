@@ -420,7 +420,7 @@ fn a_rejoin_reads_chunks_past_known_layers_and_refuses_one_given_for_a_known_lay
     before.extend(c.iter().cloned());
     let e = rejoin_chunked_cut(&m, &l, &before, &known).unwrap_err();
     assert!(
-        e.contains("1 point chunks given that no part names") && e.contains("chunk 0 of layer 1"),
+        e.contains("part 0 of layer 1 names 0 point chunks, 1 given"),
         "{e}"
     );
     let mut after = c.clone();

@@ -120,7 +120,7 @@ fn attach_timed(args: &ReaderArgs, started: u64, commands: &Receiver<Cmd>) -> Re
         .as_deref()
         .ok_or("attach mode needs --query-layer")?;
     let (_reader, first) = attach(args)?;
-    std::hint::black_box(query(&first.view(), layer, &mut Points(1))?);
+    std::hint::black_box(query(first.view(), layer, &mut Points(1))?);
     let answered = unix_ns();
     let cpu = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
     let cpu_ns = u64::try_from(cpu.tv_sec).unwrap_or(0) * 1_000_000_000
@@ -202,7 +202,7 @@ fn latency(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
                 let generation = view.generation();
                 let answered = match &args.query_layer {
                     Some(layer) => {
-                        std::hint::black_box(query(&view, layer, &mut points)?);
+                        std::hint::black_box(query(view, layer, &mut points)?);
                         unix_ns()
                     }
                     None => visible,
@@ -262,7 +262,7 @@ fn qps(args: &ReaderArgs, commands: &Receiver<Cmd>) -> Res<()> {
                 last = snapshot.generation();
                 snapshots += 1;
             }
-            std::hint::black_box(query(&snapshot.view(), layer, &mut points)?);
+            std::hint::black_box(query(snapshot.view(), layer, &mut points)?);
             latencies.push(u32::try_from(t.elapsed().as_nanos()).unwrap_or(u32::MAX));
         }
         let elapsed = start.elapsed().as_nanos();

@@ -214,6 +214,7 @@ impl Mission<'_> {
                 bytes: r.bytes_sent,
                 layers_sent: r.layers_sent,
                 chunks_sent: r.chunks_sent,
+                segments: r.segments,
             });
         }
         Ok(())

@@ -19,13 +19,14 @@ pub fn notes(md: &str) -> Option<String> {
 }
 
 /// The numbers of the tables, in order: key and label (with its unit).
-const METRICS: [(&str, &str); 21] = [
+const METRICS: [(&str, &str); 22] = [
     ("publish_median_us", "`publish()` per tick, median"),
     ("publish_mean_us", "`publish()` per tick, mean"),
     ("update_mean_us", "stream step per tick, mean"),
     ("bytes_median_bytes", "bytes published per tick, median"),
     ("bytes_mean_bytes", "bytes published per tick, mean"),
     ("layers_sent_mean", "segments (layers) sent per tick, mean"),
+    ("segments_mean", "segments a cut names, mean"),
     ("visible_p50_us", "publish → visible p50, worst reader"),
     ("visible_p99_us", "publish → visible p99, worst reader"),
     ("slowest_p99_us", "publish → visible in every reader, p99"),

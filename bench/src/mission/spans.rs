@@ -126,6 +126,8 @@ pub struct Tick {
     pub layers_sent: usize,
     /// `PublishReport::chunks_sent`.
     pub chunks_sent: usize,
+    /// `PublishReport::segments`: what a reader's join walks.
+    pub segments: usize,
 }
 
 /// What one reader process looked like at a mark (`/proc`, the readers idle).
@@ -191,6 +193,7 @@ pub fn compute(span: &Span, around: &Around<'_>, logs: &[Log]) -> Value {
     put("bytes_mean_bytes", mean(&bytes));
     put("layers_sent_mean", mean(&ns(|t| t.layers_sent as u64)));
     put("chunks_sent_mean", mean(&ns(|t| t.chunks_sent as u64)));
+    put("segments_mean", mean(&ns(|t| t.segments as u64)));
     let mut readers = Vec::new();
     let mut seen_all = Vec::new();
     for (i, log) in logs.iter().enumerate() {
@@ -338,6 +341,7 @@ mod tests {
                 bytes: 100 * g as usize,
                 layers_sent: 1,
                 chunks_sent: 0,
+                segments: 40,
             })
             .collect();
         // The reader saw generations 1, 2 and 4 (3 in 4), 10 µs after each publish call,

@@ -125,7 +125,7 @@ pub fn run(args: &RoleArgs) -> Result<(), Box<dyn std::error::Error>> {
         batches += 1;
         let check = batches % args.check_every.max(1) == 0;
         let t = Instant::now();
-        let answers = answer(args.role, &view, batches);
+        let answers = answer(args.role, view, batches);
         query_ns.push(t.elapsed().as_nanos() as f64 / answers.len().max(1) as f64);
         if check {
             // Sampled: a batch the checker has no room for is not checked.
@@ -190,7 +190,7 @@ impl Checker {
             for (snapshot, answers) in rx {
                 let view = snapshot.view();
                 for (q, got) in &answers {
-                    let same = brute_force(&view, q) == *got;
+                    let same = brute_force(view, q) == *got;
                     shared[1].fetch_add(u64::from(same), Ordering::Relaxed);
                     shared[0].fetch_add(1, Ordering::Relaxed);
                 }

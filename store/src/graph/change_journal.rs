@@ -17,8 +17,14 @@ pub(crate) enum Change {
     All,
     /// This node's row (edges, nesting, labels, features, box; or a new node).
     Node(NodeId),
-    /// This node's points (its row and the layer index).
-    Geometry(NodeId),
+    /// This node's points (its row and the layer index), of which the first `kept` stay
+    /// as they were.
+    Geometry {
+        /// The node.
+        id: NodeId,
+        /// How many of its leading points the change kept.
+        kept: usize,
+    },
     /// The node index rooted at this node.
     IndexRoot(NodeId),
     /// This node was removed (whether it had points: the layer index changes then).
@@ -45,6 +51,10 @@ pub(crate) struct LayerChanges {
     pub(crate) index_roots: Vec<NodeId>,
     /// Nodes removed from the layer (may repeat).
     pub(crate) removed: Vec<NodeId>,
+    /// Nodes whose points changed, each with how many of its leading points the change
+    /// kept (may repeat: what stays of a node's points since [`LayerChanges::since`] is
+    /// at least its least entry). A node of `nodes` not listed here kept its points.
+    pub(crate) points_kept: Vec<(NodeId, usize)>,
 }
 
 impl LayerChanges {
@@ -57,6 +67,7 @@ impl LayerChanges {
             nodes: Vec::new(),
             index_roots: Vec::new(),
             removed: Vec::new(),
+            points_kept: Vec::new(),
         }
     }
 
@@ -68,8 +79,9 @@ impl LayerChanges {
         let (list, id) = match change {
             Change::All => return self.overflow(),
             Change::Node(id) => (&mut self.nodes, id),
-            Change::Geometry(id) => {
+            Change::Geometry { id, kept } => {
                 self.geometry = true;
+                self.points_kept.push((id, kept));
                 (&mut self.nodes, id)
             }
             Change::IndexRoot(id) => (&mut self.index_roots, id),
@@ -81,7 +93,7 @@ impl LayerChanges {
         if list.last() != Some(&id) {
             list.push(id);
         }
-        if self.nodes.len() + self.index_roots.len() + self.removed.len()
+        if self.nodes.len() + self.index_roots.len() + self.removed.len() + self.points_kept.len()
             > layer_nodes.max(MIN_BOUND)
         {
             self.overflow();

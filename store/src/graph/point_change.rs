@@ -15,6 +15,8 @@ pub(crate) struct PointChange<'a> {
     /// `old` and `new` without their common prefix and suffix.
     removed: &'a [Point],
     added: &'a [Point],
+    /// How many leading points the change keeps as they were.
+    kept: usize,
     new_box: OnceCell<Option<Aabb>>,
     kept_old: OnceCell<Arc<[Point]>>,
     kept_new: OnceCell<Arc<[Point]>>,
@@ -24,15 +26,15 @@ impl<'a> PointChange<'a> {
     /// The change from `old` to `new` (compared once, point by point, for the parts that
     /// differ).
     pub(crate) fn new(old: &'a [Point], new: &'a [Point]) -> Self {
-        let (removed, added) = crate::id::changed_points(old, new);
-        Self::with_parts(old, new, removed, added)
+        let (kept, removed, added) = crate::id::point_difference(old, new);
+        Self::with_parts(old, new, removed, added, kept)
     }
 
     /// The change that appends `points[appended_from..]` to `points[..appended_from]`
     /// (nothing compared).
     pub(crate) fn appended(points: &'a [Point], appended_from: usize) -> Self {
         let (old, added) = points.split_at(appended_from);
-        Self::with_parts(old, points, &[], added)
+        Self::with_parts(old, points, &[], added, appended_from)
     }
 
     fn with_parts(
@@ -40,16 +42,23 @@ impl<'a> PointChange<'a> {
         new: &'a [Point],
         removed: &'a [Point],
         added: &'a [Point],
+        kept: usize,
     ) -> Self {
         PointChange {
             old,
             new,
             removed,
             added,
+            kept,
             new_box: OnceCell::new(),
             kept_old: OnceCell::new(),
             kept_new: OnceCell::new(),
         }
+    }
+
+    /// How many leading points the change keeps as they were (bit for bit).
+    pub(crate) fn kept(&self) -> usize {
+        self.kept
     }
 
     /// The points before the change.

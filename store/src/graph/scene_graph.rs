@@ -464,7 +464,13 @@ impl SceneGraph {
     /// point, for [`Self::points_changed`].
     fn points_changing(&mut self, id: NodeId, change: &PointChange<'_>) -> Vec<NodeId> {
         let layer = self.nodes[&id].layer;
-        self.touch_layer(layer, Change::Geometry(id));
+        self.touch_layer(
+            layer,
+            Change::Geometry {
+                id,
+                kept: change.kept(),
+            },
+        );
         let emptied = self.geometry_changed(id, change);
         self.index_geometry_changed(id, change);
         emptied

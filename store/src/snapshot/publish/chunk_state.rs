@@ -42,6 +42,9 @@ impl ChangedPoints {
     /// Records the changes a row-by-row patch of `old` makes: rows `dirty_rows` take the
     /// points of the graph's node with the id at that row in `ids`, rows past `old`'s are
     /// appended. `old` still holds its previous rows (after any cut from its end).
+    /// `points_kept` is the journal's: per node whose points changed, how many leading
+    /// points a change kept (a node not listed kept them all), so that only the points
+    /// past that are compared (a mesh growing by appends compares nothing).
     /// Returns, per dirty row, how many of its leading points stay as they were (the
     /// patch rewrites only the rest).
     pub(super) fn note_patch(
@@ -50,15 +53,30 @@ impl ChangedPoints {
         old: &LayerSegment,
         dirty_rows: &[usize],
         ids: &[u64],
+        mut points_kept: Vec<(NodeId, usize)>,
     ) -> Vec<usize> {
+        points_kept.sort_unstable();
         let mut kept = Vec::with_capacity(dirty_rows.len());
         for &row in dirty_rows {
             let (a, b) = (
                 old.point_offsets[row] as usize,
                 old.point_offsets[row + 1] as usize,
             );
-            let new = &graph.nodes[&NodeId(ids[row])].points;
-            let same = common_prefix(&old.points[a..b], new);
+            let id = NodeId(ids[row]);
+            let new = &graph.nodes[&id].points;
+            // The least `kept` of the node's entries (sorted by id, then `kept`), if any.
+            let known = match points_kept.binary_search(&(id, 0)) {
+                Ok(at) | Err(at) => points_kept.get(at).filter(|(n, _)| *n == id),
+            };
+            let same = match known {
+                Some(&(_, k)) => {
+                    let k = k.min(b - a).min(new.len());
+                    k + common_prefix(&old.points[a + k..b], &new[k..])
+                }
+                // Not listed: the node kept its points (checked cheaply, in case).
+                None if b - a == new.len() => b - a,
+                None => common_prefix(&old.points[a..b], new),
+            };
             kept.push(same);
             if new.len() == b - a {
                 self.add(a + same..b);

@@ -131,7 +131,10 @@ pub(super) fn patched(
         .chain((old_rows..ids.len()).map(|row| (row as u32, NO_PARENT)))
         .collect();
     let point_changes = PointChanges::find(graph, &old, &dirty_rows, &ids, cut_points);
-    let points_kept = chunks.changed.note_patch(graph, &old, &dirty_rows, &ids);
+    let points_kept =
+        chunks
+            .changed
+            .note_patch(graph, &old, &dirty_rows, &ids, changes.points_kept);
 
     let mut s = match rows_in_place(graph, &mut old, &mut table, &dirty_rows, &points_kept, &ids) {
         Some(terms_changed) => {

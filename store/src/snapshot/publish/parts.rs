@@ -40,6 +40,26 @@ pub(super) struct PartRows {
 /// Updates of its layer a sealed part must go untouched before it may merge.
 const COLD_UPDATES: u64 = 16;
 
+/// Updates of its layer a sealed part must go untouched before it may merge past `max`
+/// rows, up to [`FROZEN_GROWTH`] times `max` (about 34 s of a 30 Hz stream).
+const FROZEN_UPDATES: u64 = 1024;
+
+/// How many times `max` rows a part that stays untouched for [`FROZEN_UPDATES`] may grow
+/// to by merges: a long history keeps `FROZEN_GROWTH` times fewer parts.
+const FROZEN_GROWTH: usize = 16;
+
+impl PartRows {
+    /// Most rows of a part merged from parts untouched for [`FROZEN_UPDATES`] updates
+    /// (and within what a part's index items can address).
+    fn frozen_max(&self) -> usize {
+        let addressable = (1 << crate::snapshot::PART_ITEM_ROW_BITS) - 1;
+        self.max
+            .saturating_mul(FROZEN_GROWTH)
+            .min(addressable)
+            .max(self.max)
+    }
+}
+
 /// One part of a layer.
 pub(super) struct Part {
     /// The part's number (in its segment id).
@@ -48,8 +68,13 @@ pub(super) struct Part {
     /// lower bound whatever its own).
     low: u64,
     pub(super) cached: Box<Cached>,
-    /// The layer's update count when the part last changed.
+    /// The layer's update count when the part last changed (its segment is new).
     touched: u64,
+    /// The layer's update count when a row of the part last changed (a merge keeps the
+    /// later of its parts'): how long the part has been cold.
+    edited: u64,
+    /// Whether the part lost rows in the layer's last update (a sliding window's front).
+    lost_rows: bool,
     /// Whether the part is in published form (`ChunkState::publish_form`); only a part
     /// that changed is put back inline and published again.
     published: bool,
@@ -119,6 +144,8 @@ impl LayerParts {
             low,
             cached: Cached::build(graph, layer, number, ids),
             touched: self.updates,
+            edited: self.updates,
+            lost_rows: false,
             published: false,
             chunk_ids: Vec::new(),
         });
@@ -235,14 +262,19 @@ impl LayerParts {
         for id in changes.index_roots {
             routed[self.route(id.0)].index_roots.push(id);
         }
+        for (id, kept) in changes.points_kept {
+            routed[self.route(id.0)].points_kept.push((id, kept));
+        }
         let single = self.parts.len() == 1;
         let parts = std::mem::take(&mut self.parts);
         for (mut part, mut c) in parts.into_iter().zip(routed) {
             if c.nodes.is_empty() && c.removed.is_empty() && c.index_roots.is_empty() {
+                part.lost_rows = false;
                 self.parts.push(part);
                 continue;
             }
             c.geometry = changes.geometry;
+            part.lost_rows = !c.removed.is_empty();
             if part.published {
                 part.cached.chunks.restore(&mut part.cached.segment);
                 part.published = false;
@@ -265,6 +297,7 @@ impl LayerParts {
                 }
             };
             part.touched = self.updates;
+            part.edited = self.updates;
             self.parts.push(part);
         }
         let total: usize = self.parts.iter().map(|p| p.cached.segment.ids.len()).sum();
@@ -272,7 +305,7 @@ impl LayerParts {
             return None;
         }
         if let Some(rows) = rows {
-            self.split_large(graph, layer, rows);
+            self.split(graph, layer, rows);
             self.drop_empty();
             self.merge_cold(graph, layer, rows);
         }
@@ -307,24 +340,42 @@ impl LayerParts {
         }
     }
 
-    /// Splits every part of more than `rows.max` rows into pieces of `rows.max / 2`.
-    fn split_large(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
-        if self
-            .parts
-            .iter()
-            .all(|p| p.cached.segment.ids.len() <= rows.max)
-        {
+    /// Splits the parts the policy keeps smaller: one that lost rows in this update into
+    /// pieces of `rows.tail` (of `rows.max / 2` first if it holds more than `rows.max`:
+    /// the front of a sliding window then resends about a tail's rows per removal, not
+    /// its whole part), one that changed past `rows.max` rows (an
+    /// insert in the middle, or an edit of a frozen part) and any part past
+    /// [`PartRows::frozen_max`] (a bulk load) into pieces of `rows.max / 2`.
+    fn split(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
+        let now = self.updates;
+        let half = (rows.max / 2).max(1);
+        let piece = |p: &Part| {
+            let len = p.cached.segment.ids.len();
+            if p.lost_rows && len > rows.tail {
+                // A frozen part first into pieces of `max / 2`, then its front.
+                Some(if len <= rows.max { rows.tail } else { half })
+            } else if (p.touched == now && len > rows.max) || len > rows.frozen_max() {
+                Some(half)
+            } else {
+                None
+            }
+        };
+        if self.parts.iter().all(|p| piece(p).is_none()) {
             return;
         }
-        let piece = (rows.max / 2).max(1);
         let parts = std::mem::take(&mut self.parts);
         for part in parts {
-            let ids = &part.cached.segment.ids;
-            if ids.len() <= rows.max {
+            let Some(piece) = piece(&part) else {
                 self.parts.push(part);
                 continue;
-            }
-            let pieces: Vec<Vec<u64>> = ids.chunks(piece).map(<[u64]>::to_vec).collect();
+            };
+            let pieces: Vec<Vec<u64>> = part
+                .cached
+                .segment
+                .ids
+                .chunks(piece)
+                .map(<[u64]>::to_vec)
+                .collect();
             self.free.push(part.number);
             self.reshaped = true;
             for (i, ids) in pieces.into_iter().enumerate() {
@@ -352,29 +403,35 @@ impl LayerParts {
         }
     }
 
-    /// Merges sealed parts untouched for [`COLD_UPDATES`] updates into their right
-    /// neighbour when it is at least as large and the two fit `rows.max`.
+    /// Merges sealed parts whose rows no change touched for [`COLD_UPDATES`] updates
+    /// (merges do not count) into their right
+    /// neighbour when it is at least as large and the two fit `rows.max` (parts untouched
+    /// for [`FROZEN_UPDATES`]: [`PartRows::frozen_max`]).
     fn merge_cold(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
-        let cold = |p: &Part, now: u64| now - p.touched >= COLD_UPDATES;
+        let idle = |p: &Part, now: u64| now - p.edited;
         let len = |p: &Part| p.cached.segment.ids.len();
         // The tail (last part) never merges.
         let mut at = self.parts.len().saturating_sub(2);
         while at > 0 {
             let (left, right) = (&self.parts[at - 1], &self.parts[at]);
-            if cold(left, self.updates)
-                && cold(right, self.updates)
-                && len(left) <= len(right)
-                && len(left) + len(right) <= rows.max
-            {
+            let idle = idle(left, self.updates).min(idle(right, self.updates));
+            let limit = if idle >= FROZEN_UPDATES {
+                rows.frozen_max()
+            } else {
+                rows.max
+            };
+            if idle >= COLD_UPDATES && len(left) <= len(right) && len(left) + len(right) <= limit {
                 let right = self.parts.remove(at);
                 let left = &self.parts[at - 1];
                 let mut ids = left.cached.segment.ids.clone();
                 ids.extend_from_slice(&right.cached.segment.ids);
                 let number = left.number;
+                let edited = left.edited.max(right.edited);
                 self.free.push(right.number);
                 let merged = &mut self.parts[at - 1];
                 merged.cached = Cached::build(graph, layer, number, ids);
                 merged.touched = self.updates;
+                merged.edited = edited;
                 merged.published = false;
                 self.reshaped = true;
             }

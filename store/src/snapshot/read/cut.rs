@@ -19,7 +19,9 @@ use rkyv::vec::ArchivedVec;
 pub(super) type ArchivedTermIndex = ArchivedHashMap<ArchivedString, [rkyv::rend::u32_le; 2]>;
 
 /// A consistent cut of archived layers: the [`crate::SceneView`] over validated bytes from a
-/// `.ygg` file or from shared memory.
+/// `.ygg` file or from shared memory. Cloning copies its tables of references, not the
+/// bytes.
+#[derive(Clone)]
 pub struct ArchivedScene<'a> {
     pub(super) manifest: &'a ArchivedManifest,
     /// The cut's structure (layer names, DAG, part lists, term indexes), whose layers are
@@ -42,6 +44,9 @@ pub struct ArchivedScene<'a> {
     /// ascending: slot 0 is a part's layer index base tree, slot `1 + i` the tree of its
     /// node index `i`.
     pub(super) index_trees: Vec<&'a ArchivedTreeChunk>,
+    /// Per position in `parts`, the range of its trees in `index_trees`; empty when no
+    /// tree travels as a chunk.
+    pub(super) tree_ranges: Vec<[u32; 2]>,
 }
 
 /// Checks what a structure's bytecheck does not: layer ids ascending, DAG edges and term
@@ -137,6 +142,32 @@ fn unordered<T, K: Ord + std::fmt::Debug>(
     ))
 }
 
+/// Per part of `parts`, the range of the items (keyed by layer, part and place,
+/// ascending) that belong to it; empty when there are no items.
+fn part_ranges(
+    parts: &[&ArchivedLayerSegment],
+    keys: impl Iterator<Item = (u32, u32, u32)>,
+) -> Vec<[u32; 2]> {
+    // The runs of items by (layer, part), then each part's run among them.
+    let mut runs: Vec<((u32, u32), [u32; 2])> = Vec::new();
+    for (i, (layer, part, _)) in keys.enumerate() {
+        match runs.last_mut() {
+            Some((k, range)) if *k == (layer, part) => range[1] = i as u32 + 1,
+            _ => runs.push(((layer, part), [i as u32, i as u32 + 1])),
+        }
+    }
+    if runs.is_empty() {
+        return Vec::new();
+    }
+    parts
+        .iter()
+        .map(|p| {
+            runs.binary_search_by_key(&(p.layer.to_native(), p.part.to_native()), |(k, _)| *k)
+                .map_or([0, 0], |at| runs[at].1)
+        })
+        .collect()
+}
+
 impl<'a> ArchivedScene<'a> {
     /// Joins a validated manifest with its validated part segments (ascending by
     /// (layer id, part number), as segment ids sort them), the validated point chunks of
@@ -188,37 +219,33 @@ impl<'a> ArchivedScene<'a> {
         if let Some(problem) = problem {
             return Err(problem);
         }
-        let (mut point_chunks, mut tree_chunks) = (0, 0);
         for (i, m) in manifest.layers.iter().enumerate() {
             let range = scene.part_start[i] as usize..scene.part_start[i + 1] as usize;
-            for &p in &scene.parts[range.clone()] {
-                point_chunks += p.point_chunks.len();
-                tree_chunks += usize::from(
-                    p.layer_index
-                        .as_ref()
-                        .is_some_and(|x| x.tree_chunk.is_some()),
-                ) + p
-                    .node_indexes
-                    .iter()
-                    .filter(|x| x.tree_chunk.is_some())
-                    .count();
-            }
-            if !known.layer(i) {
+            if known.layer(i) {
+                // The same parts with the same chunks as in an accepted cut: only what a
+                // chunk given beside them would change is looked at.
+                for at in range {
+                    scene.check_point_chunk_count(scene.parts[at], at)?;
+                }
+            } else {
                 scene.check_layer_parts(m, &structure.layers[i], range)?;
             }
         }
-        if point_chunks != scene.chunks.len() {
+        // Every given chunk lies in the range of some part (which checked it above).
+        let assigned =
+            |ranges: &[[u32; 2]]| -> usize { ranges.iter().map(|[a, b]| (b - a) as usize).sum() };
+        if assigned(&scene.chunk_ranges) != scene.chunks.len() {
             return Err(format!(
-                "{} point chunks given that no part names (the parts name {point_chunks}, {} given){}",
-                scene.chunks.len().saturating_sub(point_chunks),
+                "{} point chunks given that no part names ({} given){}",
+                scene.chunks.len() - assigned(&scene.chunk_ranges),
                 scene.chunks.len(),
                 scene.stray_point_chunk().unwrap_or_default()
             ));
         }
-        if tree_chunks != scene.index_trees.len() {
+        if assigned(&scene.tree_ranges) != scene.index_trees.len() {
             return Err(format!(
-                "{} tree chunks given that no part names (the parts name {tree_chunks}, {} given)",
-                scene.index_trees.len().saturating_sub(tree_chunks),
+                "{} tree chunks given that no part names ({} given)",
+                scene.index_trees.len() - assigned(&scene.tree_ranges),
                 scene.index_trees.len()
             ));
         }
@@ -283,26 +310,46 @@ impl<'a> ArchivedScene<'a> {
         Ok(())
     }
 
-    /// Checks the point and tree chunks of part `p` (at `position` in the cut) against
-    /// the references it holds.
-    fn check_part_chunks(&self, p: &ArchivedLayerSegment, position: usize) -> Result<(), String> {
-        let (layer, part) = (p.layer.to_native(), p.part.to_native());
+    /// Checks that part `p` (at `position` in the cut) is given as many point chunks as
+    /// it names.
+    fn check_point_chunk_count(
+        &self,
+        p: &ArchivedLayerSegment,
+        position: usize,
+    ) -> Result<(), String> {
         let [a, b] = self.chunk_ranges.get(position).copied().unwrap_or([0, 0]);
         if (b - a) as usize != p.point_chunks.len() {
             return Err(format!(
-                "part {part} of layer {layer} names {} point chunks, {} given",
+                "part {} of layer {} names {} point chunks, {} given",
+                p.part,
+                p.layer,
                 p.point_chunks.len(),
                 b - a
             ));
         }
+        Ok(())
+    }
+
+    /// Checks the point and tree chunks of part `p` (at `position` in the cut) against
+    /// the references it holds: every one it names given, and nothing else for it.
+    fn check_part_chunks(&self, p: &ArchivedLayerSegment, position: usize) -> Result<(), String> {
+        let (layer, part) = (p.layer.to_native(), p.part.to_native());
+        self.check_point_chunk_count(p, position)?;
+        let [a, _] = self.chunk_ranges.get(position).copied().unwrap_or([0, 0]);
         for (index, r) in p.point_chunks.iter().enumerate() {
             check_chunk_matches(self.chunks[a as usize + index], layer, part, index, r)?;
         }
-        let check_tree = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
-            let tree = self.tree_chunk_segment(layer, part, slot).ok_or_else(|| {
-                format!("part {part} of layer {layer} names tree chunk {slot}, not given")
-            })?;
-            check_tree_chunk_matches(tree, layer, part, slot, items, r)
+        let [a, b] = self.tree_ranges.get(position).copied().unwrap_or([0, 0]);
+        let trees = &self.index_trees[a as usize..b as usize];
+        let mut named = 0;
+        let mut check_tree = |slot: u32, items: u32, r: &ArchivedTreeChunkRef| {
+            named += 1;
+            let at = trees
+                .binary_search_by_key(&slot, |t| t.slot.to_native())
+                .map_err(|_| {
+                    format!("part {part} of layer {layer} names tree chunk {slot}, not given")
+                })?;
+            check_tree_chunk_matches(trees[at], layer, part, slot, items, r)
         };
         if let Some(index) = p.layer_index.as_ref()
             && let Some(r) = index.tree_chunk.as_ref()
@@ -314,6 +361,12 @@ impl<'a> ArchivedScene<'a> {
                 // `check_layer` bounded the node indexes by the part's rows.
                 check_tree(1 + i as u32, index.ids.len() as u32, r)?;
             }
+        }
+        if named != trees.len() {
+            return Err(format!(
+                "part {part} of layer {layer} names {named} tree chunks, {} given",
+                trees.len()
+            ));
         }
         Ok(())
     }
@@ -388,26 +441,8 @@ impl<'a> ArchivedScene<'a> {
             run_start += run_len;
         }
         part_start.push(parts.len() as u32);
-        let chunk_ranges = if chunks.is_empty() {
-            Vec::new()
-        } else {
-            // The runs of chunks by (layer, part), then each part's run among them.
-            let mut runs: Vec<((u32, u32), [u32; 2])> = Vec::new();
-            for (i, c) in chunks.iter().enumerate() {
-                let key = (c.layer.to_native(), c.part.to_native());
-                match runs.last_mut() {
-                    Some((k, range)) if *k == key => range[1] = i as u32 + 1,
-                    _ => runs.push((key, [i as u32, i as u32 + 1])),
-                }
-            }
-            parts
-                .iter()
-                .map(|p| {
-                    runs.binary_search_by_key(&part_key(p), |(k, _)| *k)
-                        .map_or([0, 0], |at| runs[at].1)
-                })
-                .collect()
-        };
+        let chunk_ranges = part_ranges(&parts, chunks.iter().map(chunk_key));
+        let tree_ranges = part_ranges(&parts, trees.iter().map(tree_key));
         let scene = ArchivedScene {
             manifest,
             structure,
@@ -417,6 +452,7 @@ impl<'a> ArchivedScene<'a> {
             chunks,
             chunk_ranges,
             index_trees: trees,
+            tree_ranges,
         };
         (scene, problem)
     }
@@ -458,6 +494,11 @@ impl<'a> ArchivedScene<'a> {
         self.part_start
             .partition_point(|&s| s <= part)
             .saturating_sub(1)
+    }
+
+    /// The cut's manifest (validated).
+    pub fn manifest(&self) -> &'a ArchivedManifest {
+        self.manifest
     }
 
     /// The manifest's generation.

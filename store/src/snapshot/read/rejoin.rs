@@ -8,10 +8,10 @@ pub struct KnownParts<'k> {
     /// The structure segment is the very bytes of one a join accepted: ascending layer
     /// ids, DAG, names, part lists and term lists need no check.
     pub structure: bool,
-    /// Per layer position in the manifest: `true` if every part of the layer is the very
-    /// bytes of an earlier accepted cut, its manifest entry has the generation and node
-    /// count it had there, and it named no point or tree chunk there. Shorter than the
-    /// layer count: the rest are unknown.
+    /// Per layer position in the manifest: `true` if every part of the layer and every
+    /// point and tree chunk given for it is the very bytes of an earlier accepted cut, the
+    /// same segments as there, and its manifest entry has the generation and node count it
+    /// had there. Shorter than the layer count: the rest are unknown.
     pub layers: &'k [bool],
 }
 
