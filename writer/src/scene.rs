@@ -90,8 +90,10 @@ pub const MIN_DEFAULT_MAX_LAYERS: usize = 256;
 
 /// The layer bound of a writer created on a graph of `layers` layers when none is set: room
 /// for a quarter more segments and at least 256 more (a layer that grows over a mission
-/// is split into parts, about one per [`MAX_PART_ROWS`] rows plus a few: a
-/// 100,000-node mission adds about 100), rounded up to a multiple of 64, at most
+/// is split into parts: about one per 16 × [`MAX_PART_ROWS`] rows of its history, one
+/// per [`MAX_PART_ROWS`] of the rows changed in the last 1,024 updates, and a few; the
+/// demo's stream goes from 74 to 88 segments over 100,000 ticks; edits and removals
+/// split a part into at most 32 pieces at a time), rounded up to a multiple of 64, at most
 /// [`ygg_transport::protocol::MAX_LAYERS`]. Tight on purpose: attaching to the 103-room
 /// office (418 layers) took 44 ms at a bound of 896 and 34 ms at 512.
 pub fn default_max_layers(layers: usize) -> usize {

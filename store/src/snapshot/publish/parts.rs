@@ -9,19 +9,25 @@
 //!   rows until it holds `tail` rows ([`PART_ROWS`](crate::snapshot::PART_ROWS)); the
 //!   next append starts a new tail, so the sealed part is not sent again. An agent pose
 //!   per tick costs the tail's rows (at most `tail`), whatever the trajectory's length.
-//! - Sealed parts that no change touched for [`COLD_UPDATES`] updates of their layer
-//!   merge with their right neighbour when it is at least as large and the two hold at
-//!   most `max` rows ([`MAX_PART_ROWS`](crate::snapshot::MAX_PART_ROWS)): like a binary
-//!   counter, a layer of `n` rows keeps O(log(n / tail) + n / max) parts, each row is
-//!   resent O(log(max / tail)) times by merges over its life, and a merge sends at most
-//!   `max` rows once. Parts that keep changing (the front of a sliding window) stay small.
-//! - A part past `max` rows (inserts in the middle, a bulk load) is split into pieces of
-//!   `max / 2`; an empty part is dropped (a layer keeps at least one).
+//! - Sealed parts whose rows no change touched for [`COLD_UPDATES`] updates of their
+//!   layer merge with their right neighbour when it is at least as large and the two
+//!   hold at most `max` rows ([`MAX_PART_ROWS`](crate::snapshot::MAX_PART_ROWS)): like a
+//!   binary counter, each row is resent O(log(max / tail)) times by merges over its life,
+//!   and a merge sends at most `max` rows once.
+//! - Parts untouched for [`FROZEN_UPDATES`] updates go on merging up to
+//!   [`FROZEN_GROWTH`] times `max` ([`PartRows::frozen_max`]), so a layer of `n` rows
+//!   keeps O(log(n / tail) + n / frozen_max) parts plus those changed lately.
+//! - A part that lost rows (the front of a sliding window) is split into pieces of
+//!   `tail` (of `max / 2` first when it holds more than `max`); a part that changed and
+//!   holds more than `max` (inserts in the middle, an edit of a frozen part), or any
+//!   part past `frozen_max` (a bulk load), into pieces of `max / 2`. An empty part is
+//!   dropped (a layer keeps at least one).
 //! - Part numbers (in segment ids) are reused once freed, so they stay below the most
 //!   parts a layer had at once.
 //!
-//! Worst cases: an edit of any row resends its part (at most `max` rows); a merge or a
-//! split rebuilds and resends at most `max` rows (`2 * max` for a split of a bulk part).
+//! Worst cases: an edit of any row resends its part once (at most `frozen_max` rows),
+//! split so that the next edits there resend at most `max / 2`; a merge rebuilds and
+//! resends at most `frozen_max` rows.
 
 use super::chunk_state::PublishedLayer;
 use super::part_patch::{Cached, patched};
