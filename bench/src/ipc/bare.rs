@@ -88,7 +88,13 @@ impl BarePublisher {
 
     /// Publishes payload number `seq`: loan, write every byte, send, wake the subscriber.
     pub(crate) fn publish(&self, seq: u64) -> Res<()> {
-        let mut sample = self.publisher.loan_slice_uninit(self.len)?;
+        self.publish_bytes(seq, self.len)
+    }
+
+    /// [`BarePublisher::publish`] of a payload of `len` bytes (at least 1, at most the
+    /// length the publisher was created for).
+    pub(crate) fn publish_bytes(&self, seq: u64, len: usize) -> Res<()> {
+        let mut sample = self.publisher.loan_slice_uninit(len.clamp(1, self.len))?;
         *sample.user_header_mut() = seq;
         let sample = sample.write_from_fn(|i| (i as u64 ^ seq) as u8);
         sample.send()?;

@@ -12,7 +12,7 @@
 //! part alone.
 
 mod args;
-mod bare;
+pub(crate) mod bare;
 pub(crate) mod cases;
 pub(crate) mod child;
 pub(crate) mod clock;

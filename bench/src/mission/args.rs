@@ -27,6 +27,12 @@ pub struct MissionArgs {
     /// trajectory, as `ygg serve --keep-poses`); default: keep all.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub keep_poses: Option<u64>,
+    /// Beside each tick's publish, send as many bytes through a bare iceoryx2 publisher
+    /// (no Yggdrasil code) to a subscriber process, half a tick later at a rate: the floor
+    /// that `publish()` and publish → visible are set against, per window, in the same
+    /// run. This build only (not with --against).
+    #[arg(long)]
+    pub bare: bool,
     /// Ticks per window.
     #[arg(long, default_value_t = 1_000, value_parser = clap::value_parser!(u64).range(1..))]
     pub window: u64,
@@ -76,6 +82,8 @@ pub(crate) struct Config {
     pub(crate) window: u64,
     /// Late readers per window.
     pub(crate) attach_samples: usize,
+    /// Whether a bare iceoryx2 pair runs beside the writer.
+    pub(crate) bare: bool,
 }
 
 impl Config {
@@ -86,6 +94,12 @@ impl Config {
                 "--rate must be a non-negative number of ticks per second, got {}",
                 args.rate
             ));
+        }
+        if args.bare && args.against.is_some() {
+            return Err(
+                "--bare measures this build's floor in the same run; use it without --against"
+                    .into(),
+            );
         }
         let ticks = args
             .ticks
@@ -107,6 +121,7 @@ impl Config {
                     .unwrap_or(if args.quick { 1 } else { 3 }),
                 "--attach-samples",
             )?,
+            bare: args.bare,
         })
     }
 
@@ -129,6 +144,9 @@ impl Config {
         if let Some(k) = self.keep_poses {
             a.extend(["--keep-poses".to_owned(), k.to_string()]);
         }
+        if self.bare {
+            a.push("--bare".to_owned());
+        }
         a
     }
 
@@ -141,6 +159,7 @@ impl Config {
             "keep_poses": self.keep_poses,
             "window": self.window,
             "attach_samples": self.attach_samples,
+            "bare": self.bare,
         })
     }
 }
@@ -164,7 +183,7 @@ mod tests {
 
     #[test]
     fn a_run_is_told_exactly_what_the_benchmark_was() {
-        let cfg = parse("--ticks 500 --readers 3 --rate 30 --keep-poses 100").unwrap();
+        let cfg = parse("--ticks 500 --readers 3 --rate 30 --keep-poses 100 --bare").unwrap();
         let line = cfg.to_args().join(" ");
         assert!(line.starts_with("mission --leaf "), "{line}");
         let back = parse(line.trim_start_matches("mission ")).unwrap();
@@ -187,6 +206,7 @@ mod tests {
             "--keep-poses 0",
             "--window x",
             "--repeats 0",
+            "--bare --against /bin/true",
         ] {
             assert!(parse(bad).is_err(), "{bad}");
         }

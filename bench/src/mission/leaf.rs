@@ -6,6 +6,7 @@
 use super::args::{Config, FORMAT};
 use super::procfs;
 use super::spans::{self, Around, Kind, Log, ProcSample, Span, Tick};
+use crate::ipc::bare::BarePublisher;
 use crate::ipc::cases::{
     ATTACH_TIMEOUT, EXIT_GRACE, collect_seen, reader_args, spawn_attacher, writer,
 };
@@ -25,6 +26,18 @@ use ygg_writer::SceneWriter;
 
 /// How long readers may take to catch up with the writer at a mark.
 const CATCH_UP: Duration = Duration::from_secs(60);
+
+/// Largest payload the bare iceoryx2 floor sends (a tick that sends more is floored at
+/// this size).
+const BARE_MAX_BYTES: usize = 8 << 20;
+
+/// The bare iceoryx2 floor of `--bare`: a publisher in this process, a subscriber
+/// process, and what the subscriber recorded (by tick number).
+struct BareFloor {
+    publisher: BarePublisher,
+    subscriber: Readers,
+    log: Log,
+}
 
 /// Runs one mission and prints its result.
 pub fn main(cfg: &Config) -> Res<()> {
@@ -68,6 +81,8 @@ struct Mission<'a> {
     initial_generation: u64,
     /// Readers at each mark after any attach, by mark: the start of the spans from there.
     starts: Vec<(u64, Vec<ProcSample>)>,
+    /// With `--bare`: the floor beside the writer.
+    bare: Option<BareFloor>,
 }
 
 fn run(cfg: &Config, scene: &Scene) -> Res<Value> {
@@ -95,9 +110,23 @@ fn run(cfg: &Config, scene: &Scene) -> Res<Value> {
         &reader_args("latency", None),
         ATTACH_TIMEOUT,
     )?;
+    let bare = if cfg.bare {
+        Some(BareFloor {
+            publisher: BarePublisher::new(&scene.name, &scene.prefix, BARE_MAX_BYTES, 2)?,
+            subscriber: Readers::spawn(1, scene, &reader_args("bare", None), ATTACH_TIMEOUT)?,
+            log: Log::new(),
+        })
+    } else {
+        None
+    };
     progress(&format!(
-        "office: {nodes_start} nodes; {} reader(s) attached",
-        cfg.readers
+        "office: {nodes_start} nodes; {} reader(s) attached{}",
+        cfg.readers,
+        if cfg.bare {
+            "; bare iceoryx2 floor"
+        } else {
+            ""
+        }
     ));
     let mut m = Mission {
         cfg,
@@ -111,6 +140,7 @@ fn run(cfg: &Config, scene: &Scene) -> Res<Value> {
         logs: vec![Log::new(); cfg.readers],
         initial_generation,
         starts: Vec::new(),
+        bare,
     };
     let windows = spans::windows(cfg.ticks, cfg.window);
     let bins = spans::bins(cfg.ticks);
@@ -156,6 +186,9 @@ fn run(cfg: &Config, scene: &Scene) -> Res<Value> {
     }
     let nodes_end = m.w.graph().node_count();
     m.readers.finish(EXIT_GRACE)?;
+    if let Some(bare) = m.bare.take() {
+        bare.subscriber.finish(EXIT_GRACE)?;
+    }
     drop(m.w);
     Ok(json!({
         "format": FORMAT,
@@ -203,9 +236,21 @@ impl Mission<'_> {
             let report = self.replay.step(self.w.graph_mut())?;
             self.window.trim(self.w.graph_mut(), &self.replay, report)?;
             let update_ns = u.elapsed().as_nanos() as u64;
+            let started = Instant::now();
             let t0 = unix_ns();
             let r = self.w.publish()?;
             let t1 = unix_ns();
+            let (mut bare_t0, mut bare_call_ns) = (0, 0);
+            if let Some(bare) = &self.bare {
+                // Half a tick later at a rate, so that the floor and the readers do not
+                // queue for the same cores; at once otherwise.
+                if let Some(p) = period {
+                    std::thread::sleep((p / 2).saturating_sub(started.elapsed()));
+                }
+                bare_t0 = unix_ns();
+                bare.publisher.publish_bytes(i, r.bytes_sent)?;
+                bare_call_ns = unix_ns() - bare_t0;
+            }
             self.ticks.push(Tick {
                 generation: r.generation,
                 t0,
@@ -215,6 +260,8 @@ impl Mission<'_> {
                 layers_sent: r.layers_sent,
                 chunks_sent: r.chunks_sent,
                 segments: r.segments,
+                bare_t0,
+                bare_call_ns,
             });
         }
         Ok(())
@@ -235,6 +282,7 @@ impl Mission<'_> {
         // At mark 0 each reader holds the first publish: it said `ready` with it.
         if mark > 0 {
             self.catch_up(self.generation_before(mark))?;
+            self.bare_catch_up(mark)?;
         }
         let readers = self.sample_readers();
         let writer = procfs::sample(None);
@@ -298,6 +346,32 @@ impl Mission<'_> {
         }
     }
 
+    /// With `--bare`: collects the bare subscriber's records until it holds tick
+    /// `mark - 1` (it always gets the newest sample; one it missed is left out of the
+    /// floor's latencies).
+    fn bare_catch_up(&mut self, mark: u64) -> Res<()> {
+        let Some(bare) = &mut self.bare else {
+            return Ok(());
+        };
+        let deadline = Instant::now() + CATCH_UP;
+        loop {
+            let seen = collect_seen(&mut bare.subscriber)?;
+            let mut new: Log = seen.into_iter().flatten().collect();
+            new.sort_unstable_by_key(|(n, _)| *n);
+            bare.log.extend(new);
+            if bare.log.last().is_some_and(|(n, _)| *n + 1 >= mark) {
+                return Ok(());
+            }
+            if Instant::now() > deadline {
+                return Err(format!(
+                    "the bare subscriber did not see tick {} within {CATCH_UP:?}",
+                    mark - 1
+                )
+                .into());
+            }
+        }
+    }
+
     /// The metrics of `span`, which ends at this mark.
     fn span(&self, span: &Span, end: &AtMark) -> Res<Value> {
         let start = self
@@ -316,6 +390,7 @@ impl Mission<'_> {
                 readers_end: &end.readers,
                 writer_end: end.writer,
                 nodes: end.nodes,
+                bare: self.bare.as_ref().map(|b| &b.log),
             },
             &self.logs,
         );
@@ -336,6 +411,10 @@ impl Mission<'_> {
         for log in &mut self.logs {
             let k = log.partition_point(|(g, _)| *g <= older);
             log.drain(..k);
+        }
+        if let Some(bare) = &mut self.bare {
+            let k = bare.log.partition_point(|(n, _)| *n < tick);
+            bare.log.drain(..k);
         }
         let n = usize::try_from(tick.saturating_sub(self.base)).unwrap_or(0);
         self.ticks.drain(..n.min(self.ticks.len()));

@@ -19,7 +19,7 @@ pub fn notes(md: &str) -> Option<String> {
 }
 
 /// The numbers of the tables, in order: key and label (with its unit).
-const METRICS: [(&str, &str); 22] = [
+const METRICS: [(&str, &str); 26] = [
     ("publish_median_us", "`publish()` per tick, median"),
     ("publish_mean_us", "`publish()` per tick, mean"),
     ("update_mean_us", "stream step per tick, mean"),
@@ -48,6 +48,22 @@ const METRICS: [(&str, &str); 22] = [
     ("reader_rss_mb", "reader RSS, largest (MB)"),
     ("reader_rss_anon_mb", "reader private RSS, largest (MB)"),
     ("nodes", "nodes in the scene at the window's end"),
+    (
+        "bare_publish_us",
+        "bare iceoryx2, same bytes: publish call, median",
+    ),
+    (
+        "bare_visible_p50_us",
+        "bare iceoryx2, same bytes: publish → subscriber holds them, p50",
+    ),
+    (
+        "publish_vs_bare",
+        "`publish()` median / bare publish call median",
+    ),
+    (
+        "visible_vs_bare",
+        "publish → visible p50, worst reader / bare p50",
+    ),
 ];
 
 /// One build's runs.
@@ -371,6 +387,32 @@ impl Report {
             fmt_bytes(most),
             met(most.is_finite().then_some(most <= 24e3))
         );
+        // Against the bare iceoryx2 floor of the same run (`--bare`), in every window.
+        for (key, what, bound) in [
+            (
+                "publish_vs_bare",
+                "`publish()` ≤ 2× bare iceoryx2's publish call",
+                2.0,
+            ),
+            (
+                "visible_vs_bare",
+                "publish → visible p50 (worst reader) ≤ 2.5× bare iceoryx2's",
+                2.5,
+            ),
+        ] {
+            let (a, b) = (get(first, key), get(last, key));
+            if a.is_finite() || b.is_finite() {
+                let worst = s
+                    .windows
+                    .iter()
+                    .map(|w| get(w, key))
+                    .fold(f64::NAN, f64::max);
+                md += &format!(
+                    "| {what}, every window (largest: {worst:.2}×) | {a:.2}× | {b:.2}× | | {} |\n",
+                    met(worst.is_finite().then_some(worst <= bound))
+                );
+            }
+        }
         md
     }
 
@@ -508,6 +550,8 @@ fn fmt_value(key: &str, v: f64) -> String {
         fmt_bytes(v)
     } else if key.ends_with("_share") {
         format!("{:.1} %", v * 100.0)
+    } else if key.ends_with("_vs_bare") {
+        format!("{v:.2}×")
     } else if key.ends_with("_ms") || key.ends_with("_mb") || key.ends_with("_mean") {
         format!("{v:.1}")
     } else {
@@ -559,6 +603,7 @@ mod tests {
             keep_poses: None,
             window: 10,
             attach_samples: 1,
+            bare: false,
         };
         let r = Report::new(
             vec![base, new],

@@ -101,6 +101,21 @@ pub fn bins(ticks: u64) -> Vec<Span> {
         .collect()
 }
 
+/// The bare iceoryx2 floor over `ticks` (the first numbered `first`): each bare publish
+/// call's duration and, for each one the subscriber recorded (`log`, by tick number), the
+/// time from before the call to the subscriber holding the bytes; ns.
+fn bare_floor(first: u64, ticks: &[Tick], log: &Log) -> (Vec<f64>, Vec<f64>) {
+    let mut calls = Vec::with_capacity(ticks.len());
+    let mut visible = Vec::with_capacity(ticks.len());
+    for (n, t) in (first..).zip(ticks).filter(|(_, t)| t.bare_t0 > 0) {
+        calls.push(t.bare_call_ns as f64);
+        if let Ok(at) = log.binary_search_by_key(&n, |(seq, _)| *seq) {
+            visible.push(log[at].1[0].saturating_sub(t.bare_t0) as f64);
+        }
+    }
+    (calls, visible)
+}
+
 /// Every tick count at which some span starts or ends, ascending, with 0.
 pub fn marks(spans: &[Span]) -> Vec<u64> {
     let set: BTreeSet<u64> = std::iter::once(0)
@@ -128,6 +143,10 @@ pub struct Tick {
     pub chunks_sent: usize,
     /// `PublishReport::segments`: what a reader's join walks.
     pub segments: usize,
+    /// With `--bare`: Unix ns just before the bare publish of as many bytes (0: none).
+    pub bare_t0: u64,
+    /// With `--bare`: how long that publish call took, ns.
+    pub bare_call_ns: u64,
 }
 
 /// What one reader process looked like at a mark (`/proc`, the readers idle).
@@ -157,6 +176,8 @@ pub struct Around<'a> {
     pub writer_end: ProcSample,
     /// Nodes of the graph at the span's end.
     pub nodes: usize,
+    /// With `--bare`: the bare subscriber's records, by tick number (ascending).
+    pub bare: Option<&'a Log>,
 }
 
 /// Metrics of a span: a flat map of numbers (keys end in their unit: `_us`, `_ms`,
@@ -230,7 +251,8 @@ pub fn compute(span: &Span, around: &Around<'_>, logs: &[Log]) -> Value {
             .collect::<Vec<_>>()
     };
     let max = |v: Vec<f64>| v.into_iter().fold(f64::NAN, f64::max);
-    put("visible_p50_us", max(each("visible_p50_us")));
+    let worst_p50_us = max(each("visible_p50_us"));
+    put("visible_p50_us", worst_p50_us);
     put("visible_p99_us", max(each("visible_p99_us")));
     let all = observe(&publishes, &seen_all);
     put(
@@ -250,6 +272,15 @@ pub fn compute(span: &Span, around: &Around<'_>, logs: &[Log]) -> Value {
         around.writer_end.rss_anon as f64 / 1e6,
     );
     put("nodes", around.nodes as f64);
+    if let Some(log) = around.bare {
+        let (calls, visible) = bare_floor(span.start, around.ticks, log);
+        let call = median(&calls);
+        let p50 = median(&visible);
+        put("bare_publish_us", call / 1e3);
+        put("bare_visible_p50_us", p50 / 1e3);
+        put("publish_vs_bare", median(&publish) / call);
+        put("visible_vs_bare", worst_p50_us * 1e3 / p50);
+    }
     json!({
         "name": span.name,
         "start": span.start,
@@ -342,7 +373,16 @@ mod tests {
                 layers_sent: 1,
                 chunks_sent: 0,
                 segments: 40,
+                // A bare publish half a millisecond after each tick, 1 µs long.
+                bare_t0: g * 1_000_000 + 500_000,
+                bare_call_ns: 1_000,
             })
+            .collect();
+        // The bare subscriber held ticks 0, 1 and 3 (numbered from the span's start) 4 µs
+        // after their calls; tick 2 it never saw.
+        let bare: Log = [0u64, 1, 3]
+            .iter()
+            .map(|&n| (n, [(n + 1) * 1_000_000 + 504_000, 0, 2_000]))
             .collect();
         // The reader saw generations 1, 2 and 4 (3 in 4), 10 µs after each publish call,
         // and generation 5 of the next span.
@@ -369,6 +409,7 @@ mod tests {
                 readers_end: &[sample(30_000)],
                 writer_end: sample(0),
                 nodes: 7,
+                bare: Some(&bare),
             },
             &[log],
         );
@@ -384,5 +425,9 @@ mod tests {
         assert_eq!(v["readers"][0]["skipped"], 1);
         assert_eq!(m["skipped_share"], 0.25);
         assert_eq!(m["reader_rss_mb"], 2.0);
+        assert_eq!(m["bare_publish_us"], 1.0);
+        assert_eq!(m["bare_visible_p50_us"], 4.0);
+        assert_eq!(m["publish_vs_bare"], 2.0);
+        assert_eq!(m["visible_vs_bare"], 2.5);
     }
 }

@@ -79,8 +79,11 @@ pub(super) struct Part {
     /// The layer's update count when a row of the part last changed (a merge keeps the
     /// later of its parts'): how long the part has been cold.
     edited: u64,
-    /// Whether the part lost rows in the layer's last update (a sliding window's front).
-    lost_rows: bool,
+    /// The layer's update count when the part, or the part it was split from, last lost
+    /// rows (a sliding window's front); `None` if never. Such parts do not merge for
+    /// [`FROZEN_UPDATES`] updates, so that the pieces ahead of a window's front are not
+    /// merged again before the front reaches them.
+    lost_at: Option<u64>,
     /// Whether the part is in published form (`ChunkState::publish_form`); only a part
     /// that changed is put back inline and published again.
     published: bool,
@@ -151,7 +154,7 @@ impl LayerParts {
             cached: Cached::build(graph, layer, number, ids),
             touched: self.updates,
             edited: self.updates,
-            lost_rows: false,
+            lost_at: None,
             published: false,
             chunk_ids: Vec::new(),
         });
@@ -275,12 +278,13 @@ impl LayerParts {
         let parts = std::mem::take(&mut self.parts);
         for (mut part, mut c) in parts.into_iter().zip(routed) {
             if c.nodes.is_empty() && c.removed.is_empty() && c.index_roots.is_empty() {
-                part.lost_rows = false;
                 self.parts.push(part);
                 continue;
             }
             c.geometry = changes.geometry;
-            part.lost_rows = !c.removed.is_empty();
+            if !c.removed.is_empty() {
+                part.lost_at = Some(self.updates);
+            }
             if part.published {
                 part.cached.chunks.restore(&mut part.cached.segment);
                 part.published = false;
@@ -357,7 +361,7 @@ impl LayerParts {
         let half = (rows.max / 2).max(1);
         let piece = |p: &Part| {
             let len = p.cached.segment.ids.len();
-            if p.lost_rows && len > rows.tail {
+            if p.lost_at == Some(now) && len > rows.tail {
                 // A frozen part first into pieces of `max / 2`, then its front.
                 Some(if len <= rows.max { rows.tail } else { half })
             } else if (p.touched == now && len > rows.max) || len > rows.frozen_max() {
@@ -387,6 +391,9 @@ impl LayerParts {
             for (i, ids) in pieces.into_iter().enumerate() {
                 let low = if i == 0 { part.low } else { ids[0] };
                 self.push_built(graph, layer, low, ids);
+                if let Some(piece) = self.parts.last_mut() {
+                    piece.lost_at = part.lost_at;
+                }
             }
         }
     }
@@ -410,11 +417,12 @@ impl LayerParts {
     }
 
     /// Merges sealed parts whose rows no change touched for [`COLD_UPDATES`] updates
-    /// (merges do not count) into their right
-    /// neighbour when it is at least as large and the two fit `rows.max` (parts untouched
-    /// for [`FROZEN_UPDATES`]: [`PartRows::frozen_max`]).
+    /// (merges do not count) into their right neighbour when it is at least as large and
+    /// the two fit `rows.max` (parts untouched for [`FROZEN_UPDATES`]:
+    /// [`PartRows::frozen_max`]); parts that lost rows lately do not merge.
     fn merge_cold(&mut self, graph: &SceneGraph, layer: LayerId, rows: PartRows) {
         let idle = |p: &Part, now: u64| now - p.edited;
+        let lost_lately = |p: &Part, now: u64| p.lost_at.is_some_and(|t| now - t < FROZEN_UPDATES);
         let len = |p: &Part| p.cached.segment.ids.len();
         // The tail (last part) never merges.
         let mut at = self.parts.len().saturating_sub(2);
@@ -426,18 +434,25 @@ impl LayerParts {
             } else {
                 rows.max
             };
-            if idle >= COLD_UPDATES && len(left) <= len(right) && len(left) + len(right) <= limit {
+            if idle >= COLD_UPDATES
+                && !lost_lately(left, self.updates)
+                && !lost_lately(right, self.updates)
+                && len(left) <= len(right)
+                && len(left) + len(right) <= limit
+            {
                 let right = self.parts.remove(at);
                 let left = &self.parts[at - 1];
                 let mut ids = left.cached.segment.ids.clone();
                 ids.extend_from_slice(&right.cached.segment.ids);
                 let number = left.number;
                 let edited = left.edited.max(right.edited);
+                let lost_at = left.lost_at.max(right.lost_at);
                 self.free.push(right.number);
                 let merged = &mut self.parts[at - 1];
                 merged.cached = Cached::build(graph, layer, number, ids);
                 merged.touched = self.updates;
                 merged.edited = edited;
+                merged.lost_at = lost_at;
                 merged.published = false;
                 self.reshaped = true;
             }
