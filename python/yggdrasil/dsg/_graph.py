@@ -450,7 +450,7 @@ class DynamicSceneGraph:
                     attrs._semantic_label = int(f.get("semantic_label", NO_SEMANTIC_LABEL))
                     if "bbox_min_x" in f:
                         v = [f[k] for k in _BOX_KEYS]
-                        attrs.bounding_box = BoundingBox(v[:3], v[3:])
+                        attrs.bounding_box = BoundingBox.from_corners(v[:3], v[3:])
                 node = SceneGraphNode(nid, lkey, attrs, self)
                 attrs._owner = node
                 nodes[nid] = node
@@ -597,11 +597,11 @@ class DynamicSceneGraph:
         return (int(layer), _partition(partition))
 
     def add_layer(self, layer: int, partition: Union[int, str] = 0, name: str = "") -> LayerView:
-        """Adds a layer (and names it); returns its view."""
+        """Adds a layer (and names it, unless the name is taken); returns its view."""
         key = (int(layer), _partition(partition))
         view = LayerView(self._layer(key))
         if name:
-            self._names[name] = key
+            self._names.setdefault(name, key)
         return view
 
     def remove_layer(self, layer: int, partition: Union[int, str] = 0) -> None:
@@ -757,6 +757,9 @@ class DynamicSceneGraph:
         if k in self._inter:
             return False
         if la.layer == lb.layer:
+            if enforce_single_parent:  # as spark_dsg: neither is the parent, the source is the child
+                for old in list(a._parents):
+                    self._drop_edge(s, old)
             a._siblings.add(t)
             b._siblings.add(s)
         else:
@@ -983,7 +986,7 @@ def compute_ancestor_bounding_box(G: DynamicSceneGraph, nid, depth: int = 1, bbo
     if not frontier:
         return BoundingBox()
     pts = np.array([G._nodes[n].attributes._position for n in frontier])
-    return BoundingBox(pts.min(axis=0), pts.max(axis=0))
+    return BoundingBox.from_corners(pts.min(axis=0), pts.max(axis=0))
 
 
 def add_bounding_boxes_to_layer(G: DynamicSceneGraph, layer_id, child_layer: str = "PLACES", bbox_type=None) -> None:

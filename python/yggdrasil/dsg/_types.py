@@ -171,8 +171,8 @@ _IDENTITY = Quaternion()
 
 
 class BoundingBox:
-    """``spark_dsg.BoundingBox``: ``BoundingBox()`` is invalid, ``BoundingBox(min, max)``
-    axis-aligned; ``type``, ``dimensions``, ``world_P_center`` (float32),
+    """``spark_dsg.BoundingBox``: ``BoundingBox()`` is invalid, ``BoundingBox(dimensions,
+    world_P_center)`` axis-aligned; ``type``, ``dimensions``, ``world_P_center`` (float32),
     ``world_R_center`` (3x3), ``min``, ``max``."""
 
     __slots__ = ("type", "dimensions", "world_P_center", "_rotation")
@@ -184,13 +184,17 @@ class BoundingBox:
             self.dimensions = np.zeros(3, dtype=np.float32)
             self.world_P_center = np.zeros(3, dtype=np.float32)
         elif len(args) == 2:
-            lo = np.asarray(args[0], dtype=np.float32).reshape(3)
-            hi = np.asarray(args[1], dtype=np.float32).reshape(3)
             self.type = BoundingBoxType.AABB
-            self.dimensions = (hi - lo).astype(np.float32)
-            self.world_P_center = ((hi + lo) / 2).astype(np.float32)
+            self.dimensions = np.asarray(args[0], dtype=np.float32).reshape(3)
+            self.world_P_center = np.asarray(args[1], dtype=np.float32).reshape(3)
         else:
-            raise TypeError("BoundingBox() or BoundingBox(min, max)")
+            raise TypeError("BoundingBox() or BoundingBox(dimensions, world_P_center)")
+
+    @classmethod
+    def from_corners(cls, lo, hi) -> "BoundingBox":
+        """The axis-aligned box from its smallest to its largest corner."""
+        lo, hi = np.asarray(lo, dtype=np.float32), np.asarray(hi, dtype=np.float32)
+        return cls(hi - lo, (hi + lo) / 2)
 
     @classmethod
     def _make(cls, kind: BoundingBoxType, dims, center, rotation: Quaternion) -> "BoundingBox":
