@@ -217,9 +217,15 @@ def machine():
     except (OSError, StopIteration):
         pass
     from importlib import metadata
+
+    def version(name):
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "not installed"
     return {"cpu": cpu, "cores": os.cpu_count(), "loadavg": " ".join(f"{x:.2f}" for x in os.getloadavg()),
-            "python": platform.python_version(), "spark_dsg": metadata.version("spark-dsg"),
-            "numpy": np.__version__, "scipy": metadata.version("scipy")}
+            "python": platform.python_version(), "spark_dsg": version("spark-dsg"),
+            "numpy": np.__version__, "scipy": version("scipy")}
 
 
 def main(argv=None):

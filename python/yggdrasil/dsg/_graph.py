@@ -384,6 +384,8 @@ class DynamicSceneGraph:
         # the Yggdrasil side: a SceneGraph mirroring every write, its snapshot
         self._g: Optional[_yggdrasil.SceneGraph] = _yggdrasil.SceneGraph()
         self._scene: Optional[_yggdrasil.Scene] = None
+        self._base: Optional[_yggdrasil.Scene] = None
+        self._log: List[tuple] = []
         self._store_layers: Dict[_Key, str] = {}
         self._layer_edges: Set[Tuple[str, str]] = set()
         self._nested: Dict[int, int] = {}
@@ -408,70 +410,83 @@ class DynamicSceneGraph:
         G = DynamicSceneGraph(empty=True)
         if path.endswith(".ygg"):
             G._g = None
-            G._scene = _yggdrasil.open(path)
+            G._scene = G._base = _yggdrasil.open(path)
         else:
             G._g = _yggdrasil.SceneGraph.import_spark_dsg(path, layout="vanilla")
-            G._scene = G._g.snapshot()
+            G._scene = G._base = G._g.snapshot()
             if path.endswith((".json", ".json.gz")):
                 G._extras_path = path
         G._pending_file = True
-        G._read_scene(G._scene)
+        # nodes are built from the scene when first asked for (see __getattr__)
+        del G._layers, G._nodes, G._inter, G._names
         return G
 
+    def __getattr__(self, name: str):
+        # a loaded graph builds its nodes, layers and edges on first use
+        if name in ("_layers", "_nodes", "_inter", "_names") and self.__dict__.get("_base") is not None:
+            self._read_scene(self.__dict__["_base"])
+            return self.__dict__[name]
+        raise AttributeError(f"'DynamicSceneGraph' object has no attribute {name!r}")
+
     def _read_scene(self, scene) -> None:
-        for name, key in _DEFAULT_NAMES.items():
-            self._names[name] = key
+        """Builds every node of the Spark-DSG layers from ``scene``, one pass per layer."""
+        layers: Dict[_Key, _Layer] = {}
+        nodes: Dict[int, SceneGraphNode] = {}
+        inter: Dict[_Key, SceneGraphEdge] = {}
+        self._layers, self._nodes, self._inter = layers, nodes, inter
+        self._names = dict(_DEFAULT_NAMES)
         pending = self._fill_from_file
-        visible: Dict[str, _Key] = {}
+        parents: List[Tuple[int, Optional[int]]] = []
+        edges: List[Tuple[int, int]] = []
+        visible: Set[str] = set()
         for store in scene.layers:
             key = _key_of_store(store)
             if key is None:
                 continue
-            visible[store] = key
+            visible.add(store)
             layer = self._layer(key, store)
             if key in _CONVENTIONAL and key != (2, 97):
                 self._names.setdefault(_CONVENTIONAL[key], key)
             cls = _default_attributes(key)
-            lkey = layer.lkey
-            nodes = layer.nodes
-            for nid in scene.layer(store).nodes:
-                n = scene.node(nid)
-                f = n.features
-                attrs = cls.__new__(cls)
+            semantic = issubclass(cls, SemanticNodeAttributes)
+            lkey, members = layer.lkey, layer.nodes
+            ids, positions, names, labels, boxes, parent_ids, layer_edges = scene.layer(store).spark_dsg_columns()
+            new = object.__new__
+            for i, nid in enumerate(ids):
+                attrs = new(cls)
                 attrs._metadata = Metadata()
                 attrs._pending = pending
-                if "position_x" in f:
-                    attrs._position = np.array([f["position_x"], f["position_y"], f["position_z"]], dtype=np.float64)
-                else:
-                    pts = n.points
-                    attrs._position = pts[0].astype(np.float64) if len(pts) else np.zeros(3)
-                if isinstance(attrs, SemanticNodeAttributes):
-                    attrs._name = str(f.get("name", ""))
-                    attrs._semantic_label = int(f.get("semantic_label", NO_SEMANTIC_LABEL))
-                    if "bbox_min_x" in f:
-                        v = [f[k] for k in _BOX_KEYS]
-                        attrs.bounding_box = BoundingBox.from_corners(v[:3], v[3:])
+                attrs._position = positions[i]
+                if semantic:
+                    attrs._name = names[i]
+                    attrs._semantic_label = labels[i]
+                    box = boxes[i]
+                    if box is not None:
+                        attrs.bounding_box = BoundingBox.from_corners(box[:3], box[3:])
                 node = SceneGraphNode(nid, lkey, attrs, self)
                 attrs._owner = node
+                members[nid] = node
                 nodes[nid] = node
-                self._nodes[nid] = node
-        # nesting (through the layouts' own layers) and layer edges
-        for nid, node in self._nodes.items():
-            parent = scene.parent(nid)
-            while parent is not None and scene.node(parent).layer not in visible:
-                parent = scene.parent(parent)
-            if parent is not None and parent in self._nodes:
+            parents.extend(zip(ids, parent_ids))
+            edges.extend(layer_edges)
+        for nid, parent in parents:
+            while parent is not None and parent not in nodes and scene.has_node(parent) and scene.node(parent).layer not in visible:
+                parent = scene.parent(parent)  # through a layout's own group nodes
+            if parent is not None and parent in nodes:
                 self._nested[nid] = parent
-                node._parents.add(parent)
-                self._nodes[parent]._children.add(nid)
-                self._inter[_edge_key(nid, parent)] = SceneGraphEdge(parent, nid, None, self)
-            layer = self._layers[(node.layer.layer, node.layer.partition)]
-            for s, t, _ in scene.edges_from(nid):
-                k = _edge_key(s, t)
-                if k not in layer.edges and t in layer.nodes:
-                    layer.edges[k] = SceneGraphEdge(s, t, None, self)
-                    node._siblings.add(t)
-                    self._nodes[t]._siblings.add(s)
+                nodes[nid]._parents.add(parent)
+                nodes[parent]._children.add(nid)
+                inter[(nid, parent) if nid < parent else (parent, nid)] = SceneGraphEdge(parent, nid, None, self)
+        for s, t in edges:
+            a, b = nodes.get(s), nodes.get(t)
+            if a is None or b is None:
+                continue
+            k = (s, t) if s < t else (t, s)
+            layer = layers[(a.layer.layer, a.layer.partition)]
+            if k not in layer.edges:
+                layer.edges[k] = SceneGraphEdge(s, t, None, self)
+                a._siblings.add(t)
+                b._siblings.add(s)
 
     def _file(self) -> _FileExtras:
         if self._extras is None:
@@ -500,82 +515,103 @@ class DynamicSceneGraph:
             self._mesh = Mesh._from_json(x.mesh)
 
     # ------------------------------------------------------------ the Yggdrasil side
+    #
+    # Every write appends its Yggdrasil edits to a log (a list append, so a write costs
+    # what spark_dsg's does); the log is applied to the SceneGraph, in order, before
+    # anything reads it: ``scene``, ``scene_graph``, ``save``.
     @property
     def scene(self) -> "_yggdrasil.Scene":
         """The graph as a ``yggdrasil.Scene`` (a snapshot taken after the last write),
         for Yggdrasil's queries: ``G.scene.objects.nearest(p)``, ``G.scene.nearest_nodes``, ..."""
+        if self._log:
+            self._flush()
         if self._scene is None:
             self._scene = self._g.snapshot()
         return self._scene
 
     @property
     def scene_graph(self) -> "_yggdrasil.SceneGraph":
-        """The ``yggdrasil.SceneGraph`` every write goes to (publish it with ``yggdrasil.Writer``)."""
-        return self._store()
+        """The ``yggdrasil.SceneGraph`` the writes go to, brought up to date (ask again
+        after more writes, e.g. before ``yggdrasil.Writer.publish()``)."""
+        self._flush()
+        return self._g
 
-    def _store(self) -> "_yggdrasil.SceneGraph":
-        g = self._g
-        if g is None:
+    def _edit(self, *op) -> None:
+        if self._g is None:
             # a mapped .ygg: the first write copies it into an editable graph
-            scene = self._scene
-            ids = [i for name in scene.layers for i in scene.layer(name).nodes]
-            g = self._g = scene.subgraph(ids)
+            base = self._base
+            self._g = base.subgraph([i for name in base.layers for i in base.layer(name).nodes])
+        self._log.append(op)
         self._scene = None
-        return g
+
+    def _flush(self) -> None:
+        if self._g is None:
+            self._edit("noop")
+        g, log = self._g, self._log
+        self._log = []
+        for op in log:
+            kind = op[0]
+            if kind == "layer":
+                if op[1] not in g.layers:
+                    g.add_layer(op[1])
+            elif kind == "layer_edge":
+                try:
+                    g.add_layer_edge(op[1], op[2])
+                except _yggdrasil.MutationError:
+                    if (op[1], op[2]) not in _layer_edges(g):
+                        raise
+            elif kind == "unlink":
+                g.remove_edge(op[1], op[2])
+                try:  # a file's undirected edge may be stored both ways
+                    g.remove_edge(op[2], op[1])
+                except _yggdrasil.MutationError:
+                    pass
+            elif kind != "noop":
+                getattr(g, kind)(*op[1:])
 
     def _store_layer(self, key: _Key) -> str:
         name = self._store_layers.get(key)
         if name is None:
-            name = _store_name(key)
-            g = self._store()
-            if name not in g.layers:
-                g.add_layer(name)
-            self._store_layers[key] = name
+            name = self._store_layers[key] = _store_name(key)
+            self._edit("layer", name)
         return name
 
     def _mirror_add(self, node: SceneGraphNode, key: _Key) -> None:
-        g = self._store()
         nid = node.id.value
-        g.add_node(nid, self._store_layer(key))
-        g.set_geometry(nid, [node.attributes._position])
+        self._edit("add_node", nid, self._store_layer(key))
+        self._edit("set_geometry", nid, (node.attributes._position,))
         if isinstance(node.attributes, SemanticNodeAttributes):
             self._mirror_labels(node, node.attributes)
 
     def _mirror_position(self, node: SceneGraphNode, attrs: NodeAttributes) -> None:
-        self._store().set_geometry(node.id.value, [attrs._position])
+        self._edit("set_geometry", node.id.value, (attrs._position,))
 
     def _mirror_labels(self, node: SceneGraphNode, attrs: SemanticNodeAttributes) -> None:
-        g = self._store()
         nid = node.id.value
         name, label = attrs._name, attrs._semantic_label
         labels = tuple(x for x in (name if name and name != str(node.id) else "", str(label) if label != NO_SEMANTIC_LABEL else "") if x)
         for old in node._labels:
             if old not in labels:
-                g.remove_label(nid, old)
+                self._edit("remove_label", nid, old)
         for new in labels:
             if new not in node._labels:
-                g.add_label(nid, new)
+                self._edit("add_label", nid, new)
         node._labels = labels
         if name:
-            g.set_feature(nid, "name", name)
+            self._edit("set_feature", nid, "name", name)
         if label != NO_SEMANTIC_LABEL:
-            g.set_feature(nid, "semantic_label", label)
+            self._edit("set_feature", nid, "semantic_label", label)
 
     def _mirror_nest(self, parent: SceneGraphNode, child: SceneGraphNode) -> None:
         cid = child.id.value
         if cid in self._nested:
             return  # Yggdrasil nests a node under one parent; spark_dsg's others stay here
-        g = self._store()
         pl = self._store_layer((parent.layer.layer, parent.layer.partition))
         cl = self._store_layer((child.layer.layer, child.layer.partition))
         if (pl, cl) not in self._layer_edges:
-            try:
-                g.add_layer_edge(pl, cl)
-            except _yggdrasil.MutationError as err:
-                if "exists" not in str(err) and "already" not in str(err):
-                    raise
+            self._edit("layer_edge", pl, cl)
             self._layer_edges.add((pl, cl))
-        g.nest(parent.id.value, cid)
+        self._edit("nest", parent.id.value, cid)
         self._nested[cid] = parent.id.value
 
     # ------------------------------------------------------------ layers
@@ -710,7 +746,7 @@ class DynamicSceneGraph:
             self._drop_edge(i, other)
         del self._layers[(node.layer.layer, node.layer.partition)].nodes[i]
         del self._nodes[i]
-        self._store().remove_node(i)
+        self._edit("remove_node", i)
         self._nested.pop(i, None)
         node._graph = None
         node.attributes._owner = None
@@ -751,8 +787,7 @@ class DynamicSceneGraph:
             layer.edges[k] = SceneGraphEdge(s, t, info, self)
             a._siblings.add(t)
             b._siblings.add(s)
-            g = self._store()
-            g.add_edge(s, t)
+            self._edit("add_edge", s, t)
             return True
         if k in self._inter:
             return False
@@ -783,12 +818,7 @@ class DynamicSceneGraph:
                 return False
             a._siblings.discard(t)
             b._siblings.discard(s)
-            g = self._store()
-            g.remove_edge(edge.source, edge.target)
-            try:  # a file's undirected edge may be stored both ways
-                g.remove_edge(edge.target, edge.source)
-            except _yggdrasil.MutationError:
-                pass
+            self._edit("unlink", edge.source, edge.target)
             return True
         if self._inter.pop(k, None) is None:
             return False
@@ -801,7 +831,7 @@ class DynamicSceneGraph:
         child._parents.discard(parent.id.value)
         cid = child.id.value
         if self._nested.get(cid) == parent.id.value:
-            self._store().unnest(cid)
+            self._edit("unnest", cid)
             del self._nested[cid]
             for other in sorted(child._parents):
                 self._mirror_nest(self._nodes[other], child)
@@ -906,7 +936,7 @@ class DynamicSceneGraph:
         (spark_dsg's binary encoding is not written)."""
         path = os.fspath(path)
         if path.endswith(".ygg"):
-            self._store().save(path)
+            self.scene_graph.save(path)
             return
         if not path.endswith(".json"):
             raise ValueError(f"{path}: save writes .json (Spark-DSG JSON) or .ygg; spark_dsg's binary encoding is not written")
@@ -958,6 +988,12 @@ class DynamicSceneGraph:
 
     def __repr__(self) -> str:
         return f"DynamicSceneGraph<nodes={self.num_nodes()}, edges={self.num_edges()}, layers={self.layer_keys}>"
+
+
+def _layer_edges(g) -> Set[Tuple[str, str]]:
+    """The layer DAG edges of a SceneGraph, by name."""
+    scene = g.snapshot()
+    return {(name, child) for name in scene.layers for child in scene.layer(name).children}
 
 
 def _labelspace_name(key: _Key) -> str:

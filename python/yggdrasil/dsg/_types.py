@@ -140,6 +140,9 @@ class Quaternion:
     def __init__(self, w: float = 1.0, x: float = 0.0, y: float = 0.0, z: float = 0.0):
         self.w, self.x, self.y, self.z = float(w), float(x), float(y), float(z)
 
+    def _copy(self) -> "Quaternion":
+        return Quaternion(self.w, self.x, self.y, self.z)
+
     def __eq__(self, other) -> bool:
         return isinstance(other, Quaternion) and (self.w, self.x, self.y, self.z) == (other.w, other.x, other.y, other.z)
 
@@ -204,6 +207,9 @@ class BoundingBox:
         box.world_P_center = np.asarray(center, dtype=np.float32).reshape(3)
         box._rotation = rotation
         return box
+
+    def _copy(self) -> "BoundingBox":
+        return BoundingBox._make(self.type, self.dimensions, self.world_P_center, self._rotation._copy())
 
     @property
     def min(self) -> np.ndarray:
@@ -534,20 +540,6 @@ class NodeAttributes:
         attrs._fill(raw)
         return attrs
 
-    def _clone(self) -> "NodeAttributes":
-        self._complete()
-        other = type(self).__new__(type(self))
-        other._owner = None
-        other._pending = None
-        other._metadata = Metadata(copy.deepcopy(self._metadata._data))
-        for name in self._FIELDS:
-            slot = _SLOT.get(name, name)
-            v = object.__getattribute__(self, slot)
-            if isinstance(v, (np.ndarray, list, dict)):
-                v = v.copy()
-            object.__setattr__(other, slot, v)
-        return other
-
     def __dir__(self) -> Iterable[str]:
         return sorted(set(self._FIELDS) | {"metadata"} | ({"NO_SEMANTIC_LABEL"} if "semantic_label" in self._FIELDS else set()))
 
@@ -632,6 +624,34 @@ class AgentNodeAttributes(NodeAttributes):
     __slots__ = ("timestamp", "world_R_body", "external_key", "dbow_ids", "dbow_values")
 
 
+def _make_cloner(cls: type) -> None:
+    """Gives ``cls`` a ``_clone`` that copies each field as its type needs, in straight-line
+    code (a loop over the fields costs several times more per node added)."""
+    body = [
+        "def _clone(s):",
+        "    if s._pending is not None:",
+        "        s._complete()",
+        "    o = _new(_cls)",
+        "    o._owner = None",
+        "    o._pending = None",
+        "    m = s._metadata._data",
+        "    o._metadata = _Metadata(_deepcopy(m)) if m else _Metadata()",
+    ]
+    for name, (default, _, _) in cls._FIELDS.items():
+        slot = _SLOT.get(name, name)
+        v = default()
+        if isinstance(v, (np.ndarray, list, dict)):
+            body.append(f"    o.{slot} = s.{slot}.copy()")
+        elif isinstance(v, (BoundingBox, Quaternion)):
+            body.append(f"    o.{slot} = s.{slot}._copy()")
+        else:
+            body.append(f"    o.{slot} = s.{slot}")
+    body.append("    return o")
+    scope = {"_new": object.__new__, "_cls": cls, "_Metadata": Metadata, "_deepcopy": copy.deepcopy}
+    exec("\n".join(body), scope)  # noqa: S102 - code built above from the class's own field names
+    cls._clone = scope["_clone"]
+
+
 ATTRIBUTE_TYPES = {
     cls._TYPE: cls
     for cls in (
@@ -644,6 +664,8 @@ ATTRIBUTE_TYPES = {
         AgentNodeAttributes,
     )
 }
+for _cls in ATTRIBUTE_TYPES.values():
+    _make_cloner(_cls)
 
 
 class EdgeAttributes:
