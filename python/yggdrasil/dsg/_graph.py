@@ -16,7 +16,7 @@ from __future__ import annotations
 import gzip
 import json
 import os
-from typing import Any, Dict, Iterator, List, Optional, Set, Tuple, Union
+from typing import AbstractSet, Any, Dict, Iterator, List, Optional, Set, Tuple, Union
 
 import numpy as np
 
@@ -43,6 +43,24 @@ from ._types import (
 )
 
 _Key = Tuple[int, int]
+_new = object.__new__
+_EMPTY: AbstractSet[int] = frozenset()
+
+
+def _add(node: "SceneGraphNode", slot: str, value: int) -> None:
+    """Adds ``value`` to one of a node's neighbour sets (made on first use)."""
+    members = getattr(node, slot)
+    if members is _EMPTY:
+        members = set()
+        setattr(node, slot, members)
+    members.add(value)
+
+
+def _discard(node: "SceneGraphNode", slot: str, value: int) -> None:
+    """Removes ``value`` from one of a node's neighbour sets."""
+    members = getattr(node, slot)
+    if members is not _EMPTY:
+        members.discard(value)
 _DEFAULT_NAMES: Dict[str, _Key] = {"AGENTS": (2, 0), "BUILDINGS": (5, 0), "OBJECTS": (2, 0), "PLACES": (3, 0), "ROOMS": (4, 0)}
 _CONVENTIONAL: Dict[_Key, str] = {(2, 0): "OBJECTS", (2, 97): "AGENTS", (3, 0): "PLACES", (3, 1): "MESH_PLACES", (4, 0): "ROOMS", (5, 0): "BUILDINGS"}
 _STORE_KEYS = {name: key for key, name in _CONVENTIONAL.items()}
@@ -123,12 +141,14 @@ class SceneGraphNode:
     __slots__ = ("id", "layer", "attributes", "_parents", "_children", "_siblings", "_graph", "_labels")
 
     def __init__(self, nid: int, layer: LayerKey, attributes: NodeAttributes, graph):
-        self.id = NodeSymbol(nid)
+        self.id = symbol = _new(NodeSymbol)
+        symbol.value = nid
         self.layer = layer
         self.attributes = attributes
-        self._parents: Set[int] = set()
-        self._children: Set[int] = set()
-        self._siblings: Set[int] = set()
+        # empty until the first edge: a shared frozenset (see _add)
+        self._parents: AbstractSet[int] = _EMPTY
+        self._children: AbstractSet[int] = _EMPTY
+        self._siblings: AbstractSet[int] = _EMPTY
         self._graph = graph
         self._labels: Tuple[str, ...] = ()
 
@@ -306,8 +326,8 @@ class SceneGraphLayer(_LayerReads):
         if s == t or s not in nodes or t not in nodes or k in self._layer.edges:
             return False
         self._layer.edges[k] = SceneGraphEdge(s, t, info._clone() if info is not None else EdgeAttributes())
-        nodes[s]._siblings.add(t)
-        nodes[t]._siblings.add(s)
+        _add(nodes[s], "_siblings", t)
+        _add(nodes[t], "_siblings", s)
         return True
 
     def remove_edge(self, source, target) -> bool:
@@ -315,8 +335,8 @@ class SceneGraphLayer(_LayerReads):
         s, t = node_id(source), node_id(target)
         if self._layer.edges.pop(_edge_key(s, t), None) is None:
             return False
-        self._layer.nodes[s]._siblings.discard(t)
-        self._layer.nodes[t]._siblings.discard(s)
+        _discard(self._layer.nodes[s], "_siblings", t)
+        _discard(self._layer.nodes[t], "_siblings", s)
         return True
 
     def to_binary(self) -> bytes:
@@ -451,10 +471,11 @@ class DynamicSceneGraph:
             semantic = issubclass(cls, SemanticNodeAttributes)
             lkey, members = layer.lkey, layer.nodes
             ids, positions, names, labels, boxes, parent_ids, layer_edges = scene.layer(store).spark_dsg_columns()
+            positions.flags.writeable = False  # each node's position is a read-only row of it
             new = object.__new__
             for i, nid in enumerate(ids):
                 attrs = new(cls)
-                attrs._metadata = Metadata()
+                attrs._metadata = None
                 attrs._pending = pending
                 attrs._position = positions[i]
                 if semantic:
@@ -474,8 +495,8 @@ class DynamicSceneGraph:
                 parent = scene.parent(parent)  # through a layout's own group nodes
             if parent is not None and parent in nodes:
                 self._nested[nid] = parent
-                nodes[nid]._parents.add(parent)
-                nodes[parent]._children.add(nid)
+                _add(nodes[nid], "_parents", parent)
+                _add(nodes[parent], "_children", nid)
                 inter[(nid, parent) if nid < parent else (parent, nid)] = SceneGraphEdge(parent, nid, None, self)
         for s, t in edges:
             a, b = nodes.get(s), nodes.get(t)
@@ -485,8 +506,8 @@ class DynamicSceneGraph:
             layer = layers[(a.layer.layer, a.layer.partition)]
             if k not in layer.edges:
                 layer.edges[k] = SceneGraphEdge(s, t, None, self)
-                a._siblings.add(t)
-                b._siblings.add(s)
+                _add(a, "_siblings", t)
+                _add(b, "_siblings", s)
 
     def _file(self) -> _FileExtras:
         if self._extras is None:
@@ -541,7 +562,7 @@ class DynamicSceneGraph:
             # a mapped .ygg: the first write copies it into an editable graph
             base = self._base
             self._g = base.subgraph([i for name in base.layers for i in base.layer(name).nodes])
-        self._log.append(op)
+        self._log.extend(op + (None,) * (4 - len(op)))
         self._scene = None
 
     def _flush(self) -> None:
@@ -549,25 +570,29 @@ class DynamicSceneGraph:
             self._edit("noop")
         g, log = self._g, self._log
         self._log = []
-        for op in log:
-            kind = op[0]
+        for at in range(0, len(log), 4):
+            kind, a, b, c = log[at : at + 4]
             if kind == "layer":
-                if op[1] not in g.layers:
-                    g.add_layer(op[1])
+                if a not in g.layers:
+                    g.add_layer(a)
             elif kind == "layer_edge":
                 try:
-                    g.add_layer_edge(op[1], op[2])
+                    g.add_layer_edge(a, b)
                 except _yggdrasil.MutationError:
-                    if (op[1], op[2]) not in _layer_edges(g):
+                    if (a, b) not in _layer_edges(g):
                         raise
             elif kind == "unlink":
-                g.remove_edge(op[1], op[2])
+                g.remove_edge(a, b)
                 try:  # a file's undirected edge may be stored both ways
-                    g.remove_edge(op[2], op[1])
+                    g.remove_edge(b, a)
                 except _yggdrasil.MutationError:
                     pass
+            elif kind == "set_geometry":
+                g.set_geometry(a, (b,))
+            elif kind == "set_feature":
+                g.set_feature(a, b, c)
             elif kind != "noop":
-                getattr(g, kind)(*op[1:])
+                getattr(g, kind)(*(x for x in (a, b) if x is not None))
 
     def _store_layer(self, key: _Key) -> str:
         name = self._store_layers.get(key)
@@ -577,19 +602,39 @@ class DynamicSceneGraph:
         return name
 
     def _mirror_add(self, node: SceneGraphNode, key: _Key) -> None:
+        # the hottest write: its edits appended inline (as _edit and _mirror_labels would)
+        if self._g is None:
+            self._edit("noop")
         nid = node.id.value
-        self._edit("add_node", nid, self._store_layer(key))
-        self._edit("set_geometry", nid, (node.attributes._position,))
-        if isinstance(node.attributes, SemanticNodeAttributes):
-            self._mirror_labels(node, node.attributes)
+        attrs = node.attributes
+        layer = self._store_layers.get(key) or self._store_layer(key)
+        log = self._log
+        log.extend(("add_node", nid, layer, None))
+        log.extend(("set_geometry", nid, attrs._position, None))
+        self._scene = None
+        if isinstance(attrs, SemanticNodeAttributes):
+            name, label = attrs._name, attrs._semantic_label
+            if name and not (name[-1] == ")" and name == node.id.str()):
+                node._labels = (name,)
+                log.extend(("add_label", nid, name, None))
+            if name:
+                log.extend(("set_feature", nid, "name", name))
+            if label != NO_SEMANTIC_LABEL:
+                node._labels += (str(label),)
+                log.extend(("add_label", nid, str(label), None))
+                log.extend(("set_feature", nid, "semantic_label", label))
 
     def _mirror_position(self, node: SceneGraphNode, attrs: NodeAttributes) -> None:
-        self._edit("set_geometry", node.id.value, (attrs._position,))
+        self._edit("set_geometry", node.id.value, attrs._position)
 
     def _mirror_labels(self, node: SceneGraphNode, attrs: SemanticNodeAttributes) -> None:
         nid = node.id.value
         name, label = attrs._name, attrs._semantic_label
-        labels = tuple(x for x in (name if name and name != str(node.id) else "", str(label) if label != NO_SEMANTIC_LABEL else "") if x)
+        labels: Tuple[str, ...] = ()
+        if name and name != node.id.str():  # Hydra names nodes after their symbol: no label
+            labels = (name,)
+        if label != NO_SEMANTIC_LABEL:
+            labels += (str(label),)
         for old in node._labels:
             if old not in labels:
                 self._edit("remove_label", nid, old)
@@ -785,8 +830,8 @@ class DynamicSceneGraph:
             if k in layer.edges:
                 return False
             layer.edges[k] = SceneGraphEdge(s, t, info, self)
-            a._siblings.add(t)
-            b._siblings.add(s)
+            _add(a, "_siblings", t)
+            _add(b, "_siblings", s)
             self._edit("add_edge", s, t)
             return True
         if k in self._inter:
@@ -795,15 +840,15 @@ class DynamicSceneGraph:
             if enforce_single_parent:  # as spark_dsg: neither is the parent, the source is the child
                 for old in list(a._parents):
                     self._drop_edge(s, old)
-            a._siblings.add(t)
-            b._siblings.add(s)
+            _add(a, "_siblings", t)
+            _add(b, "_siblings", s)
         else:
             parent, child = (a, b) if la.layer > lb.layer else (b, a)
             if enforce_single_parent:
                 for old in list(child._parents):
                     self._drop_edge(child.id.value, old)
-            parent._children.add(child.id.value)
-            child._parents.add(parent.id.value)
+            _add(parent, "_children", child.id.value)
+            _add(child, "_parents", parent.id.value)
             self._mirror_nest(parent, child)
         self._inter[k] = SceneGraphEdge(s, t, info, self)
         return True
@@ -816,19 +861,19 @@ class DynamicSceneGraph:
             edge = self._layers[(la.layer, la.partition)].edges.pop(k, None)
             if edge is None:
                 return False
-            a._siblings.discard(t)
-            b._siblings.discard(s)
+            _discard(a, "_siblings", t)
+            _discard(b, "_siblings", s)
             self._edit("unlink", edge.source, edge.target)
             return True
         if self._inter.pop(k, None) is None:
             return False
         if la.layer == lb.layer:
-            a._siblings.discard(t)
-            b._siblings.discard(s)
+            _discard(a, "_siblings", t)
+            _discard(b, "_siblings", s)
             return True
         parent, child = (a, b) if la.layer > lb.layer else (b, a)
-        parent._children.discard(child.id.value)
-        child._parents.discard(parent.id.value)
+        _discard(parent, "_children", child.id.value)
+        _discard(child, "_parents", parent.id.value)
         cid = child.id.value
         if self._nested.get(cid) == parent.id.value:
             self._edit("unnest", cid)

@@ -141,7 +141,9 @@ class Quaternion:
         self.w, self.x, self.y, self.z = float(w), float(x), float(y), float(z)
 
     def _copy(self) -> "Quaternion":
-        return Quaternion(self.w, self.x, self.y, self.z)
+        q = object.__new__(Quaternion)
+        q.w, q.x, q.y, q.z = self.w, self.x, self.y, self.z
+        return q
 
     def __eq__(self, other) -> bool:
         return isinstance(other, Quaternion) and (self.w, self.x, self.y, self.z) == (other.w, other.x, other.y, other.z)
@@ -209,7 +211,12 @@ class BoundingBox:
         return box
 
     def _copy(self) -> "BoundingBox":
-        return BoundingBox._make(self.type, self.dimensions, self.world_P_center, self._rotation._copy())
+        box = object.__new__(BoundingBox)
+        box.type = self.type
+        box.dimensions = self.dimensions.copy()
+        box.world_P_center = self.world_P_center.copy()
+        box._rotation = self._rotation  # never changed in place: shared
+        return box
 
     @property
     def min(self) -> np.ndarray:
@@ -391,8 +398,6 @@ def _ns(v: datetime.timedelta) -> int:
 
 # name: (default factory, from-json, to-json)
 _Field = Tuple[Any, Any, Any]
-_ident = lambda v: v  # noqa: E731
-_copy = copy.deepcopy
 
 _BASE_FIELDS: Dict[str, _Field] = {
     "position": (lambda: np.zeros(3), _f64x3, lambda v: v.tolist()),
@@ -408,7 +413,7 @@ _SEMANTIC_FIELDS: Dict[str, _Field] = {
     "semantic_label": (lambda: NO_SEMANTIC_LABEL, int, int),
     "semantic_feature": (lambda: np.zeros((0, 0), dtype=np.float32), _feature, _feature_json),
 }
-_LIST = (list, lambda v: list(v or []), _copy)
+_LIST = (tuple, lambda v: tuple(v or ()), list)
 _OBJECT_FIELDS: Dict[str, _Field] = {
     **_SEMANTIC_FIELDS,
     "registered": (lambda: False, bool, bool),
@@ -445,7 +450,7 @@ _PLACE2D_FIELDS: Dict[str, _Field] = {
 }
 _ROOM_FIELDS: Dict[str, _Field] = {
     **_SEMANTIC_FIELDS,
-    "semantic_class_probabilities": (dict, lambda v: dict(v or {}), _copy),
+    "semantic_class_probabilities": (dict, lambda v: dict(v or {}), dict),
 }
 _AGENT_FIELDS: Dict[str, _Field] = {
     **_BASE_FIELDS,
@@ -458,7 +463,66 @@ _AGENT_FIELDS: Dict[str, _Field] = {
 
 
 # fields behind a property (the setter tells the graph): their slot names
-_SLOT = {"position": "_position", "name": "_name", "semantic_label": "_semantic_label"}
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def _quaternion(q) -> "Quaternion":
+    if not isinstance(q, Quaternion):
+        raise TypeError(f"a rotation is a Quaternion, not {type(q).__name__}")
+    return q._copy()
+
+
+def _frozen_as(coerce):
+    return lambda v: _frozen(coerce(v))
+
+
+# Value fields: kept in a form no one changes in place (read-only arrays, tuples, dicts
+# only replaced), so that copies of the attributes share them, and handed out as new
+# copies, as spark_dsg hands out its Eigen and STL fields. name -> (store, hand out).
+_VALUE_FIELDS: Dict[str, Tuple[Any, Any]] = {
+    **{
+        name: (_frozen_as(coerce), np.copy)
+        for name, coerce in {
+            "position": _f64x3,
+            "color": _u8x3,
+            "semantic_feature": lambda v: np.array(v, dtype=np.float32, ndmin=2),
+            "frontier_scale": _f64x3,
+            "ellipse_matrix_compress": lambda v: np.array(v, dtype=np.float64).reshape(2, 2),
+            "ellipse_matrix_expand": lambda v: np.array(v, dtype=np.float64).reshape(2, 2),
+            "ellipse_centroid": _f64x3,
+            "dbow_ids": lambda v: np.array(v, dtype=np.uint32).reshape(-1),
+            "dbow_values": lambda v: np.array(v, dtype=np.float32).reshape(-1),
+        }.items()
+    },
+    **{
+        name: (tuple, list)
+        for name in (
+            "mesh_connections", "voxblox_mesh_connections", "pcl_mesh_connections", "mesh_vertex_labels",
+            "deformation_connections", "boundary", "pcl_boundary_connections",
+        )
+    },
+    "semantic_class_probabilities": (dict, dict),
+    **{name: (_quaternion, Quaternion._copy) for name in ("world_R_object", "orientation", "world_R_body")},
+}
+_SLOT = {"name": "_name", "semantic_label": "_semantic_label", **{n: "_" + n for n in _VALUE_FIELDS}}
+
+
+def _slots(fields: Iterable[str]) -> Tuple[str, ...]:
+    return tuple(_SLOT.get(k, k) for k in fields)
+
+
+def _value_property(name: str) -> property:
+    slot, (store, hand_out) = "_" + name, _VALUE_FIELDS[name]
+
+    def get(self):
+        return hand_out(getattr(self, slot))
+
+    def set(self, value):
+        setattr(self, slot, store(value))
+
+    return property(get, set, doc=f"``{name}`` (a copy; assign a new value to change it).")
 
 
 class NodeAttributes:
@@ -473,15 +537,18 @@ class NodeAttributes:
     def __init__(self):
         self._owner = None
         self._pending = None
-        self._metadata = Metadata()
+        self._metadata: Optional[Metadata] = None  # made when first asked for
         for name, (default, _, _) in self._FIELDS.items():
-            object.__setattr__(self, _SLOT.get(name, name), default())
+            v = default()
+            object.__setattr__(self, _SLOT.get(name, name), _VALUE_FIELDS[name][0](v) if name in _VALUE_FIELDS else v)
 
     @property
     def metadata(self) -> Metadata:
         """The node's JSON metadata."""
         if self._pending is not None:
             self._complete()
+        if self._metadata is None:
+            self._metadata = Metadata()
         return self._metadata
 
     @property
@@ -491,7 +558,7 @@ class NodeAttributes:
 
     @position.setter
     def position(self, value) -> None:
-        self._position = _f64x3(value)
+        self._position = _frozen(_f64x3(value))  # (as _VALUE_FIELDS stores it)
         if self._owner is not None:
             self._owner._moved(self)
 
@@ -515,8 +582,9 @@ class NodeAttributes:
             except AttributeError:
                 pass
             v = raw.get(name)
-            object.__setattr__(self, slot, default() if v is None else decode(v))
-        if "metadata" in raw and not self._metadata._data:
+            v = default() if v is None else decode(v)
+            object.__setattr__(self, slot, _VALUE_FIELDS[name][0](v) if name in _VALUE_FIELDS else v)
+        if raw.get("metadata") and (self._metadata is None or not self._metadata._data):
             self._metadata = Metadata(dict(raw["metadata"] or {}))
 
     def _complete(self) -> None:
@@ -527,7 +595,7 @@ class NodeAttributes:
     def _to_json(self) -> Dict[str, Any]:
         self._complete()
         out = {name: enc(getattr(self, name)) for name, (_, _, enc) in self._FIELDS.items()}
-        out["metadata"] = copy.deepcopy(self._metadata._data)
+        out["metadata"] = copy.deepcopy(self._metadata._data) if self._metadata is not None else {}
         out["type"] = self._TYPE
         return out
 
@@ -536,7 +604,7 @@ class NodeAttributes:
         attrs = cls.__new__(cls)
         attrs._owner = None
         attrs._pending = None
-        attrs._metadata = Metadata()
+        attrs._metadata = None
         attrs._fill(raw)
         return attrs
 
@@ -555,7 +623,7 @@ class SemanticNodeAttributes(NodeAttributes):
     NO_SEMANTIC_LABEL = NO_SEMANTIC_LABEL
     _FIELDS = _SEMANTIC_FIELDS
     _TYPE = "SemanticNodeAttributes"
-    __slots__ = ("_name", "color", "bounding_box", "_semantic_label", "semantic_feature")
+    __slots__ = _slots(k for k in _SEMANTIC_FIELDS if k not in _BASE_FIELDS)
 
     @property
     def name(self) -> str:
@@ -588,7 +656,7 @@ class ObjectNodeAttributes(SemanticNodeAttributes):
 
     _FIELDS = _OBJECT_FIELDS
     _TYPE = "ObjectNodeAttributes"
-    __slots__ = ("registered", "world_R_object", "mesh_connections")
+    __slots__ = _slots(("registered", "world_R_object", "mesh_connections"))
 
 
 class PlaceNodeAttributes(SemanticNodeAttributes):
@@ -596,7 +664,7 @@ class PlaceNodeAttributes(SemanticNodeAttributes):
 
     _FIELDS = _PLACE_FIELDS
     _TYPE = "PlaceNodeAttributes"
-    __slots__ = tuple(k for k in _PLACE_FIELDS if k not in _SEMANTIC_FIELDS)
+    __slots__ = _slots(k for k in _PLACE_FIELDS if k not in _SEMANTIC_FIELDS)
 
 
 class Place2dNodeAttributes(SemanticNodeAttributes):
@@ -604,7 +672,7 @@ class Place2dNodeAttributes(SemanticNodeAttributes):
 
     _FIELDS = _PLACE2D_FIELDS
     _TYPE = "Place2dNodeAttributes"
-    __slots__ = tuple(k for k in _PLACE2D_FIELDS if k not in _SEMANTIC_FIELDS)
+    __slots__ = _slots(k for k in _PLACE2D_FIELDS if k not in _SEMANTIC_FIELDS)
 
 
 class RoomNodeAttributes(SemanticNodeAttributes):
@@ -612,7 +680,7 @@ class RoomNodeAttributes(SemanticNodeAttributes):
 
     _FIELDS = _ROOM_FIELDS
     _TYPE = "RoomNodeAttributes"
-    __slots__ = ("semantic_class_probabilities",)
+    __slots__ = _slots(("semantic_class_probabilities",))
 
 
 class AgentNodeAttributes(NodeAttributes):
@@ -621,7 +689,7 @@ class AgentNodeAttributes(NodeAttributes):
 
     _FIELDS = _AGENT_FIELDS
     _TYPE = "AgentNodeAttributes"
-    __slots__ = ("timestamp", "world_R_body", "external_key", "dbow_ids", "dbow_values")
+    __slots__ = _slots(k for k in _AGENT_FIELDS if k not in _BASE_FIELDS)
 
 
 def _make_cloner(cls: type) -> None:
@@ -634,14 +702,14 @@ def _make_cloner(cls: type) -> None:
         "    o = _new(_cls)",
         "    o._owner = None",
         "    o._pending = None",
-        "    m = s._metadata._data",
-        "    o._metadata = _Metadata(_deepcopy(m)) if m else _Metadata()",
+        "    m = s._metadata",
+        "    o._metadata = _Metadata(_deepcopy(m._data)) if m is not None and m._data else None",
     ]
     for name, (default, _, _) in cls._FIELDS.items():
         slot = _SLOT.get(name, name)
         v = default()
-        if isinstance(v, (np.ndarray, list, dict)):
-            body.append(f"    o.{slot} = s.{slot}.copy()")
+        if name in _VALUE_FIELDS:
+            body.append(f"    o.{slot} = s.{slot}")  # never changed in place: shared
         elif isinstance(v, (BoundingBox, Quaternion)):
             body.append(f"    o.{slot} = s.{slot}._copy()")
         else:
@@ -665,6 +733,9 @@ ATTRIBUTE_TYPES = {
     )
 }
 for _cls in ATTRIBUTE_TYPES.values():
+    for _name in _cls._FIELDS:
+        if _name in _VALUE_FIELDS and _name != "position" and not any(_name in vars(k) for k in _cls.__mro__):
+            setattr(_cls, _name, _value_property(_name))
     _make_cloner(_cls)
 
 
@@ -676,26 +747,31 @@ class EdgeAttributes:
     def __init__(self, weight: float = 1.0, weighted: bool = False):
         self.weight = float(weight)
         self.weighted = bool(weighted)
-        self._metadata = Metadata()
+        self._metadata: Optional[Metadata] = None  # made when first asked for
 
     @property
     def metadata(self) -> Metadata:
         """The edge's JSON metadata."""
+        if self._metadata is None:
+            self._metadata = Metadata()
         return self._metadata
 
     def _clone(self) -> "EdgeAttributes":
         other = EdgeAttributes(self.weight, self.weighted)
-        other._metadata = Metadata(copy.deepcopy(self._metadata._data))
+        if self._metadata is not None and self._metadata._data:
+            other._metadata = Metadata(copy.deepcopy(self._metadata._data))
         return other
 
     def _to_json(self) -> Dict[str, Any]:
-        return {"metadata": copy.deepcopy(self._metadata._data), "type": "EdgeAttributes", "weight": self.weight, "weighted": self.weighted}
+        data = copy.deepcopy(self._metadata._data) if self._metadata is not None else {}
+        return {"metadata": data, "type": "EdgeAttributes", "weight": self.weight, "weighted": self.weighted}
 
     @classmethod
     def _from_json(cls, raw: Optional[Mapping[str, Any]]) -> "EdgeAttributes":
         raw = raw or {}
         out = cls(raw.get("weight", 1.0), raw.get("weighted", False))
-        out._metadata = Metadata(dict(raw.get("metadata") or {}))
+        if raw.get("metadata"):
+            out._metadata = Metadata(dict(raw["metadata"]))
         return out
 
     def __dir__(self) -> Iterable[str]:
