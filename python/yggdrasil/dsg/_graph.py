@@ -13,6 +13,7 @@ spark_dsg's defaults).
 """
 from __future__ import annotations
 
+import gc
 import gzip
 import json
 import os
@@ -449,7 +450,17 @@ class DynamicSceneGraph:
         raise AttributeError(f"'DynamicSceneGraph' object has no attribute {name!r}")
 
     def _read_scene(self, scene) -> None:
-        """Builds every node of the Spark-DSG layers from ``scene``, one pass per layer."""
+        """Builds every node of the Spark-DSG layers from ``scene``, one pass per layer
+        (the collector paused: the objects built here all live as long as the graph)."""
+        collecting = gc.isenabled()
+        gc.disable()
+        try:
+            self._build_from(scene)
+        finally:
+            if collecting:
+                gc.enable()
+
+    def _build_from(self, scene) -> None:
         layers: Dict[_Key, _Layer] = {}
         nodes: Dict[int, SceneGraphNode] = {}
         inter: Dict[_Key, SceneGraphEdge] = {}
@@ -459,6 +470,7 @@ class DynamicSceneGraph:
         parents: List[Tuple[int, Optional[int]]] = []
         edges: List[Tuple[int, int]] = []
         visible: Set[str] = set()
+        new = object.__new__
         for store in scene.layers:
             key = _key_of_store(store)
             if key is None:
@@ -472,42 +484,60 @@ class DynamicSceneGraph:
             lkey, members = layer.lkey, layer.nodes
             ids, positions, names, labels, boxes, parent_ids, layer_edges = scene.layer(store).spark_dsg_columns()
             positions.flags.writeable = False  # each node's position is a read-only row of it
-            new = object.__new__
-            for i, nid in enumerate(ids):
+            for nid, position, name, label, box in zip(ids, positions, names, labels, boxes):
                 attrs = new(cls)
                 attrs._metadata = None
                 attrs._pending = pending
-                attrs._position = positions[i]
+                attrs._position = position
                 if semantic:
-                    attrs._name = names[i]
-                    attrs._semantic_label = labels[i]
-                    box = boxes[i]
+                    attrs._name = name
+                    attrs._semantic_label = label
                     if box is not None:
                         attrs.bounding_box = BoundingBox.from_corners(box[:3], box[3:])
-                node = SceneGraphNode(nid, lkey, attrs, self)
+                node = new(SceneGraphNode)
+                node.id = symbol = new(NodeSymbol)
+                symbol.value = nid
+                node.layer, node.attributes, node._graph, node._labels = lkey, attrs, self, ()
+                node._parents = node._children = node._siblings = _EMPTY
                 attrs._owner = node
                 members[nid] = node
                 nodes[nid] = node
             parents.extend(zip(ids, parent_ids))
             edges.extend(layer_edges)
+        children: Dict[int, Set[int]] = {}
         for nid, parent in parents:
             while parent is not None and parent not in nodes and scene.has_node(parent) and scene.node(parent).layer not in visible:
                 parent = scene.parent(parent)  # through a layout's own group nodes
             if parent is not None and parent in nodes:
                 self._nested[nid] = parent
-                _add(nodes[nid], "_parents", parent)
-                _add(nodes[parent], "_children", nid)
-                inter[(nid, parent) if nid < parent else (parent, nid)] = SceneGraphEdge(parent, nid, None, self)
+                nodes[nid]._parents = {parent}
+                kids = children.get(parent)
+                if kids is None:
+                    kids = children[parent] = set()
+                kids.add(nid)
+                edge = new(SceneGraphEdge)
+                edge.source, edge.target, edge._info, edge._graph = parent, nid, None, self
+                inter[(nid, parent) if nid < parent else (parent, nid)] = edge
+        for parent, kids in children.items():
+            nodes[parent]._children = kids
+        siblings: Dict[int, Set[int]] = {}
         for s, t in edges:
             a, b = nodes.get(s), nodes.get(t)
             if a is None or b is None:
                 continue
             k = (s, t) if s < t else (t, s)
-            layer = layers[(a.layer.layer, a.layer.partition)]
-            if k not in layer.edges:
-                layer.edges[k] = SceneGraphEdge(s, t, None, self)
-                _add(a, "_siblings", t)
-                _add(b, "_siblings", s)
+            found = layers[(a.layer.layer, a.layer.partition)].edges
+            if k not in found:
+                edge = new(SceneGraphEdge)
+                edge.source, edge.target, edge._info, edge._graph = s, t, None, self
+                found[k] = edge
+                for x, y in ((s, t), (t, s)):
+                    near = siblings.get(x)
+                    if near is None:
+                        near = siblings[x] = set()
+                    near.add(y)
+        for nid, near in siblings.items():
+            nodes[nid]._siblings = near
 
     def _file(self) -> _FileExtras:
         if self._extras is None:
