@@ -14,6 +14,18 @@ use crate::errors::{unknown_layer, unknown_node};
 use crate::points::{SnapshotOwner, points_array};
 use crate::snapshot::SnapshotView;
 
+/// `Layer.spark_dsg_columns`: ids, positions, names, semantic labels, stored boxes,
+/// parents and the edges leaving the layer's nodes.
+type SparkDsgColumns<'py> = (
+    Vec<u64>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+    Vec<i64>,
+    Vec<Option<[f64; 6]>>,
+    Vec<Option<u64>>,
+    Vec<(u64, u64)>,
+);
+
 /// An axis-aligned box as `((min_x, min_y, min_z), (max_x, max_y, max_z))`.
 type BoxTuple = ((f32, f32, f32), (f32, f32, f32));
 
@@ -202,25 +214,24 @@ impl Layer {
     /// first point, else zeros); `names` `""` and `semantic_labels` `2**32 - 1` where the
     /// node has none; `boxes` the six stored Spark-DSG box features or `None`; `parents`
     /// the parent id or `None`; `edges` every `(source, target)` leaving the layer's nodes.
-    #[allow(clippy::type_complexity)]
-    fn spark_dsg_columns<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> (
-        Vec<u64>,
-        Bound<'py, PyArray2<f64>>,
-        Vec<String>,
-        Vec<i64>,
-        Vec<Option<[f64; 6]>>,
-        Vec<Option<u64>>,
-        Vec<(u64, u64)>,
-    ) {
+    fn spark_dsg_columns<'py>(&self, py: Python<'py>) -> SparkDsgColumns<'py> {
         let v = self.snapshot.view();
-        let mut nodes: Vec<_> = v.layer_nodes(self.id).map(|n| (v.node_id(n).0, n)).collect();
+        let mut nodes: Vec<_> = v
+            .layer_nodes(self.id)
+            .map(|n| (v.node_id(n).0, n))
+            .collect();
         nodes.sort_unstable_by_key(|&(id, _)| id);
         let n = nodes.len();
-        let (mut ids, mut positions, mut names) = (Vec::with_capacity(n), Vec::with_capacity(n * 3), Vec::with_capacity(n));
-        let (mut labels, mut boxes, mut parents) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut ids, mut positions, mut names) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n * 3),
+            Vec::with_capacity(n),
+        );
+        let (mut labels, mut boxes, mut parents) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
         let mut edges = Vec::new();
         for (id, node) in nodes {
             ids.push(id);

@@ -206,6 +206,21 @@ class Layer:
     def parents(self) -> List[str]:
         """Names of the layers encompassing it."""
     def __len__(self) -> int: ...
+    def spark_dsg_columns(
+        self,
+    ) -> Tuple[
+        List[int],
+        npt.NDArray[np.float64],
+        List[str],
+        List[int],
+        List[Optional[Tuple[float, float, float, float, float, float]]],
+        List[Optional[int]],
+        List[Tuple[int, int]],
+    ]:
+        """The layer as the columns ``yggdrasil.dsg`` builds its nodes from, rows ascending by
+        id: ``(ids, positions, names, semantic_labels, boxes, parents, edges)``; positions an
+        ``(n, 3)`` float64 array, ``""`` / ``2**32 - 1`` for no name / label, ``None`` for no
+        stored box or parent, ``edges`` every ``(source, target)`` leaving the layer's nodes."""
 
 class ObjectQueries:
     """The object contract of ``ygg query``: Spark-DSG object ids, ascending."""
