@@ -8,6 +8,7 @@ its calls divided by the number of calls.
 """
 from __future__ import annotations
 
+import gc
 import pathlib
 import random
 import statistics
@@ -30,9 +31,16 @@ def _log(msg: str) -> None:
     sys.stderr.flush()
 
 
+def _fresh(fn: Callable[[], float]) -> float:
+    """``fn()`` (which times itself) from a collected heap."""
+    gc.collect()
+    return fn()
+
+
 def _median(fn: Callable[[], object], reps: int) -> float:
     times = []
     for _ in range(reps):
+        gc.collect()  # each repetition starts from the same heap, for both libraries
         t0 = time.perf_counter()
         fn()
         times.append(time.perf_counter() - t0)
@@ -167,7 +175,7 @@ def run(out: str, reps: int, machine: Dict[str, object]) -> int:
         G.scene
         return time.perf_counter() - t0
 
-    m = statistics.median(catch_up() for _ in range(reps))
+    m = statistics.median(_fresh(catch_up) for _ in range(reps))
     rows.append((f"the first `G.scene` after {n:,} add_node (the logged edits reach the SceneGraph, snapshot)", m * 1e3, float("nan"), "ms"))
     _log(f"first G.scene after the adds: {m * 1e3:.1f} ms")
 
@@ -183,8 +191,8 @@ def run(out: str, reps: int, machine: Dict[str, object]) -> int:
             return time.perf_counter() - t0
         return go
 
-    m = statistics.median(edges(ydsg)() for _ in range(reps)) / (n - 1) * 1e6
-    t = statistics.median(edges(spark_dsg)() for _ in range(reps)) / (n - 1) * 1e6
+    m = statistics.median(_fresh(edges(ydsg)) for _ in range(reps)) / (n - 1) * 1e6
+    t = statistics.median(_fresh(edges(spark_dsg)) for _ in range(reps)) / (n - 1) * 1e6
     rows.append(("insert_edge (places, in one layer)", m, t, "µs per call"))
     _log(f"insert_edge: {m:.2f} µs vs {t:.2f} µs")
 

@@ -124,6 +124,7 @@ class SceneGraphEdge:
     def info(self) -> EdgeAttributes:
         """The edge's attributes (weight, weighted, metadata)."""
         if self._info is None:
+            # an edge read from a file asks the file; an inserted one has the defaults
             self._info = self._graph._edge_info(self.source, self.target) if self._graph is not None else EdgeAttributes()
         return self._info
 
@@ -853,13 +854,13 @@ class DynamicSceneGraph:
         if a is None or b is None or s == t:
             return False
         k = (s, t) if s < t else (t, s)
-        info = info._clone() if info is not None else EdgeAttributes()
+        info = info._clone() if info is not None else None  # None: the defaults, made when asked for
         la, lb = a.layer, b.layer
         if la.layer == lb.layer and la.partition == lb.partition:
             layer = self._layers[(la.layer, la.partition)]
             if k in layer.edges:
                 return False
-            layer.edges[k] = SceneGraphEdge(s, t, info, self)
+            layer.edges[k] = SceneGraphEdge(s, t, info)
             _add(a, "_siblings", t)
             _add(b, "_siblings", s)
             self._edit("add_edge", s, t)
@@ -880,7 +881,7 @@ class DynamicSceneGraph:
             _add(parent, "_children", child.id.value)
             _add(child, "_parents", parent.id.value)
             self._mirror_nest(parent, child)
-        self._inter[k] = SceneGraphEdge(s, t, info, self)
+        self._inter[k] = SceneGraphEdge(s, t, info)
         return True
 
     def _drop_edge(self, s: int, t: int) -> bool:
