@@ -225,7 +225,7 @@ def _write(out: str, rows, reps: int, machine, n: int) -> None:
         if t != t:  # nothing to compare with
             lines.append(f"| {what} | {m:.3g} | — | {unit} | — |")
         else:
-            lines.append(f"| {what} | {m:.3g} | {t:.3g} | {unit} | {m / t:.2f}× |")
+            lines.append(f"| {what} | {m:.3g} | {t:.3g} | {unit} | {m / t:.3g}× |")
     lines.append("")
     lines.append(MARK_END)
     path = pathlib.Path(out)
