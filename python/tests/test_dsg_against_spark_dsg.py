@@ -10,6 +10,7 @@ import random
 import numpy as np
 import pytest
 
+import yggdrasil
 import yggdrasil.dsg as ydsg
 
 spark_dsg = pytest.importorskip("spark_dsg")
@@ -209,3 +210,36 @@ def test_writes_reach_yggdrasil_queries_live():
     assert G.scene.nearest_nodes([7, 7, 7], 1)[0] == (node.id.value, pytest.approx(0.0))
     G.remove_node(node.id)
     assert not G.scene.has_node(node.id.value)
+
+
+def test_bad_input_names_what_is_wrong(tmp_path):
+    G = ydsg.DynamicSceneGraph()
+    with pytest.raises(ValueError, match="category is one character"):
+        ydsg.NodeSymbol("Ob", 1)
+    with pytest.raises(TypeError, match="NodeAttributes, not str"):
+        G.add_node(ydsg.DsgLayers.OBJECTS, 1, "chair")
+    with pytest.raises(TypeError, match="a node id is an int or a NodeSymbol, not str"):
+        G.has_node("O(1)")
+    with pytest.raises(IndexError, match=r"missing node O\(7\)"):
+        G.get_node(ydsg.NodeSymbol("O", 7))
+    with pytest.raises(IndexError, match="missing layer 'NOPE'"):
+        G.get_layer("NOPE")
+    with pytest.raises(IndexError, match=r"missing layer 9\[1\]"):
+        G.get_layer(9, 1)
+    attrs = ydsg.ObjectNodeAttributes()
+    with pytest.raises(ValueError, match="a position is 3 numbers"):
+        attrs.position = [1.0, 2.0]
+    with pytest.raises(ValueError, match="a semantic label is in"):
+        attrs.semantic_label = -1
+    with pytest.raises(TypeError, match="a rotation is a Quaternion"):
+        attrs.world_R_object = (1, 0, 0, 0)
+    with pytest.raises(TypeError):
+        G.metadata.add({"when": object()})
+    with pytest.raises(ValueError, match=r"graph\.txt: save writes \.json"):
+        G.save(tmp_path / "graph.txt")
+    with pytest.raises(yggdrasil.FileError, match="missing.json"):
+        ydsg.load(tmp_path / "missing.json")
+    with pytest.raises(ValueError, match="not a layer written by SceneGraphLayer.to_binary"):
+        ydsg.SceneGraphLayer.from_binary(b"\x00garbage")
+    # a refused call changed nothing
+    assert G.num_nodes() == 0 and not G.metadata.get()
