@@ -146,9 +146,17 @@ def random_calls(dsg, seed):
             lo = np.array([rng.uniform(-1, 0) for _ in range(3)])
             attrs.bounding_box = dsg.BoundingBox(np.array([1.0, 2.0, 0.5]), lo)
             attrs.registered = True
+            attrs.world_R_object = dsg.Quaternion(0.5, 0.5, -0.5, 0.5)
+            attrs.semantic_feature = np.arange(6, dtype=np.float32).reshape(2, 3) * i
+            attrs.mesh_connections = [i, i + 1]
+        if prefix == "R":
+            attrs.semantic_class_probabilities = {"kitchen": 0.25, "office": 0.75}
         if prefix == "p":
             attrs.distance = rng.uniform(0, 2)
             attrs.num_basis_points = rng.randrange(5)
+            attrs.orientation = dsg.Quaternion(0.0, 0.0, 1.0, 0.0)
+            attrs.deformation_connections = [i]
+            attrs.pcl_mesh_connections = [i, 2 * i]
         attrs.metadata.add({"i": i})
         sym = dsg.NodeSymbol(prefix, i)
         assert G.add_node(layer, sym, attrs)
@@ -175,6 +183,8 @@ def random_calls(dsg, seed):
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_random_calls_build_the_graph_spark_dsg_builds(tmp_path, seed):
+    """Built by the same calls; then written by the facade as JSON and as spark_dsg's
+    binary encoding, read back by spark_dsg."""
     mine, theirs = random_calls(ydsg, seed), random_calls(spark_dsg, seed)
     assert mine.num_edges() > 100  # the calls made a real graph
     same_graph(mine, theirs)
@@ -183,6 +193,10 @@ def test_random_calls_build_the_graph_spark_dsg_builds(tmp_path, seed):
     path = tmp_path / "facade.json"
     mine.save(path)
     same_graph(mine, spark_dsg.DynamicSceneGraph.load(str(path)))
+    binary = tmp_path / "facade.sparkdsg"
+    mine.save(binary)
+    same_graph(mine, spark_dsg.DynamicSceneGraph.load(str(binary)))
+    same_graph(mine, spark_dsg.DynamicSceneGraph.from_binary(mine.to_binary()))
     loaded = spark_dsg.DynamicSceneGraph.load(str(path))
     assert dict(loaded.metadata.get()) == dict(theirs.metadata.get()) | {"labelspaces": {"_l2p0": [[0, "wall"], [1, "chair"]]}} or dict(
         loaded.metadata.get()
@@ -235,11 +249,32 @@ def test_bad_input_names_what_is_wrong(tmp_path):
         attrs.world_R_object = (1, 0, 0, 0)
     with pytest.raises(TypeError):
         G.metadata.add({"when": object()})
-    with pytest.raises(ValueError, match=r"graph\.txt: save writes \.json"):
-        G.save(tmp_path / "graph.txt")
+    with pytest.raises(FileNotFoundError, match="no-such-dir"):
+        G.save(tmp_path / "no-such-dir" / "graph.sparkdsg")
     with pytest.raises(yggdrasil.FileError, match="missing.json"):
         ydsg.load(tmp_path / "missing.json")
     with pytest.raises(ValueError, match="not a layer written by SceneGraphLayer.to_binary"):
         ydsg.SceneGraphLayer.from_binary(b"\x00garbage")
     # a refused call changed nothing
     assert G.num_nodes() == 0 and not G.metadata.get()
+
+
+@pytest.mark.parametrize("name", ["mesh.json", "mesh.sparkdsg"])
+def test_a_mesh_written_through_the_facade_loads_in_spark_dsg(tmp_path, name):
+    G = ydsg.DynamicSceneGraph()
+    mesh = ydsg.Mesh()
+    mesh.resize_vertices(4)
+    for i in range(4):
+        mesh.set_pos(i, (i, 2.0 * i, 0.5))
+        mesh.set_color(i, (10 * i, 20, 30))
+        mesh.set_label(i, i + 1)
+        mesh.set_timestamp(i, 100 + i)
+    mesh.set_faces(np.array([[0, 1], [1, 2], [2, 3]]))
+    G.mesh = mesh
+    G.save(tmp_path / name)
+    theirs = spark_dsg.DynamicSceneGraph.load(str(tmp_path / name)).mesh
+    assert theirs.num_vertices() == 4 and theirs.num_faces() == 2
+    assert np.allclose(theirs.get_vertices(), mesh.get_vertices())
+    assert np.array_equal(theirs.get_faces(), mesh.get_faces())
+    assert theirs.get_labels() == mesh.get_labels()
+    assert [theirs.timestamp(i) for i in range(4)] == [mesh.timestamp(i) for i in range(4)]

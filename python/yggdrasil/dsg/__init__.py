@@ -9,7 +9,7 @@ Code written against spark_dsg runs by changing one import::
         print(node.id, node.attributes.name, node.attributes.position)
     H = spark_dsg.DynamicSceneGraph()
     H.add_node(spark_dsg.DsgLayers.OBJECTS, spark_dsg.NodeSymbol("O", 1), spark_dsg.ObjectNodeAttributes())
-    H.save("graph.json")                     # spark_dsg 1.1.3 loads it; "graph.ygg" for Yggdrasil
+    H.save("graph.json")                     # spark_dsg 1.1.3 loads it (also .sparkdsg); .ygg for Yggdrasil
     H.scene.objects.nearest([0, 0, 0])       # Yggdrasil's queries on the same graph, live
 
 ``install_as_spark_dsg()`` registers this package as ``spark_dsg`` (with
@@ -21,9 +21,8 @@ setting a node's ``position``, ``name`` or ``semantic_label``) go to a
 last write. A loaded graph reads its nodes, nesting and layer edges from the file's
 ``yggdrasil.Scene``; the attribute fields a scene does not keep and the edge weights
 are read from a JSON file the first time one is asked for (binary and ``.ygg`` files
-give spark_dsg's defaults for them). Not covered: spark_dsg's binary writer (``save``
-writes ``.json`` and ``.ygg``), ``to_torch``, ``transform``, ``from_binary`` of a whole
-graph, ``KhronosObjectAttributes`` and ``TraversabilityNodeAttributes``; edges between
+give spark_dsg's defaults for them). Not covered: ``to_torch``, ``transform``,
+``from_binary`` of a whole graph, ``KhronosObjectAttributes`` and ``TraversabilityNodeAttributes``; edges between
 partitions and a node's second parent stay on the Python side (Yggdrasil nests a node
 under one parent and keeps edges inside a layer).
 """

@@ -22,6 +22,7 @@ from typing import AbstractSet, Any, Dict, Iterator, List, Optional, Set, Tuple,
 import numpy as np
 
 from .. import _yggdrasil
+from . import _binary
 from ._mesh import Mesh
 from ._types import (
     ATTRIBUTE_TYPES,
@@ -1007,25 +1008,37 @@ class DynamicSceneGraph:
 
     # ------------------------------------------------------------ saving
     def save(self, path: Union[str, os.PathLike], include_mesh: bool = True) -> None:
-        """Writes the graph: ``.ygg`` (Yggdrasil's snapshot of it), or Spark-DSG JSON
-        (``.json``, which spark_dsg 1.1.3 loads). Other extensions raise ``ValueError``
-        (spark_dsg's binary encoding is not written)."""
+        """Writes the graph: ``.ygg`` (Yggdrasil's snapshot of it), Spark-DSG JSON
+        (``.json``), or, for any other extension (as spark_dsg decides), spark_dsg
+        1.1.3's binary encoding; spark_dsg 1.1.3 loads both Spark-DSG files."""
         path = os.fspath(path)
         if path.endswith(".ygg"):
             self.scene_graph.save(path)
-            return
-        if not path.endswith(".json"):
-            raise ValueError(f"{path}: save writes .json (Spark-DSG JSON) or .ygg; spark_dsg's binary encoding is not written")
-        with open(path, "w") as f:
-            json.dump(self._to_json(include_mesh), f)
+        elif path.endswith(".json"):
+            with open(path, "w") as f:
+                json.dump(self._to_json(include_mesh), f)
+        else:
+            data = _binary.graph_bytes(self, include_mesh, header=True)
+            with open(path, "wb") as f:
+                f.write(data)
 
-    def _to_json(self, include_mesh: bool) -> Dict[str, Any]:
+    def _file_metadata(self) -> Dict[str, Any]:
+        """The metadata a file gets: the graph's, with the labelspaces under ``labelspaces``."""
         self._graph_extras()
         metadata = json.loads(json.dumps(self._metadata._data))
         if self._labelspaces:
             spaces = metadata.setdefault("labelspaces", {})
             for key, space in self._labelspaces.items():
                 spaces[_labelspace_name(key)] = [[k, v] for k, v in sorted(space.labels_to_names.items())]
+        return metadata
+
+    def to_binary(self, include_mesh: bool = False) -> bytes:
+        """The graph in spark_dsg 1.1.3's binary encoding, without the file header (what
+        spark_dsg's ``to_binary`` gives)."""
+        return _binary.graph_bytes(self, include_mesh, header=False)
+
+    def _to_json(self, include_mesh: bool) -> Dict[str, Any]:
+        metadata = self._file_metadata()
         nodes = [
             {"attributes": n.attributes._to_json(), "id": i, "layer": k[0], "partition": k[1]}
             for k in sorted(self._layers)

@@ -376,14 +376,14 @@ def _u8x3(v) -> np.ndarray:
 def _feature(d) -> np.ndarray:
     if not d or not d.get("rows") or not d.get("cols"):
         return np.zeros((0, 0), dtype=np.float32)
-    return np.asarray(d["data"], dtype=np.float32).reshape((d["cols"], d["rows"])).T.copy()
+    return np.asarray(d["data"], dtype=np.float32).reshape((d["rows"], d["cols"]))  # row by row
 
 
 def _feature_json(a: np.ndarray) -> Dict[str, Any]:
     a = np.asarray(a, dtype=np.float32)
     if a.size == 0:
         return {"cols": 0, "data": None, "rows": 0}
-    return {"cols": int(a.shape[1]), "data": a.T.reshape(-1).tolist(), "rows": int(a.shape[0])}
+    return {"cols": int(a.shape[1]), "data": a.reshape(-1).tolist(), "rows": int(a.shape[0])}
 
 
 def _timedelta(v) -> datetime.timedelta:
