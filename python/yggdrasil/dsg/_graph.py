@@ -68,7 +68,6 @@ _CONVENTIONAL: Dict[_Key, str] = {(2, 0): "OBJECTS", (2, 97): "AGENTS", (3, 0): 
 _STORE_KEYS = {name: key for key, name in _CONVENTIONAL.items()}
 _ROOM_PREFIX = "room:"
 _CLAIMED_OBJECTS = "/claimed-object"
-_BOX_KEYS = ("bbox_min_x", "bbox_min_y", "bbox_min_z", "bbox_max_x", "bbox_max_y", "bbox_max_z")
 _HEADER = {"project_name": "main", "version": {"major": 1, "minor": 1, "patch": 3}}
 
 
@@ -374,7 +373,6 @@ class _FileExtras:
     def __init__(self, path: Optional[str]):
         self.nodes: Dict[int, Dict[str, Any]] = {}
         self.edges: Dict[_Key, Dict[str, Any]] = {}
-        self.siblings: List[Tuple[int, int, Dict[str, Any]]] = []
         self.metadata: Dict[str, Any] = {}
         self.mesh: Optional[Dict[str, Any]] = None
         if path is None:
