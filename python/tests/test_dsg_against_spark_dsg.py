@@ -278,3 +278,26 @@ def test_a_mesh_written_through_the_facade_loads_in_spark_dsg(tmp_path, name):
     assert np.array_equal(theirs.get_faces(), mesh.get_faces())
     assert theirs.get_labels() == mesh.get_labels()
     assert [theirs.timestamp(i) for i in range(4)] == [mesh.timestamp(i) for i in range(4)]
+
+
+def test_a_facade_graph_is_published_live(scene_name):
+    """Writes through the facade reach a reader of the published scene."""
+    G = ydsg.DynamicSceneGraph()
+    attrs = ydsg.ObjectNodeAttributes()
+    attrs.name = "chair"
+    attrs.position = np.array([1.0, 1.0, 0.5])
+    G.add_node(ydsg.DsgLayers.OBJECTS, ydsg.NodeSymbol("O", 0), attrs)
+    with yggdrasil.Writer(scene_name, G.scene_graph) as writer, \
+            yggdrasil.Reader(scene_name, wait_for_writer=10) as reader:
+        first = reader.wait_next(10)
+        assert first.nodes_with_label("chair") == [ydsg.NodeSymbol("O", 0).value]
+        attrs.name = "desk"
+        attrs.position = np.array([4.0, 0.0, 0.5])
+        G.add_node(ydsg.DsgLayers.OBJECTS, ydsg.NodeSymbol("O", 1), attrs)
+        G.get_node(ydsg.NodeSymbol("O", 0)).attributes.name = "stool"
+        assert G.scene_graph.has_node(ydsg.NodeSymbol("O", 1).value)  # edits applied on asking
+        writer.publish()
+        scene = reader.wait_next(10)
+        assert scene.nodes_with_label("desk") == [ydsg.NodeSymbol("O", 1).value]
+        assert scene.nodes_with_label("chair") == []
+        assert scene.nearest_nodes([4.0, 0.0, 0.5], 1)[0][0] == ydsg.NodeSymbol("O", 1).value
