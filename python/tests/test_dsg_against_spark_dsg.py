@@ -301,3 +301,26 @@ def test_a_facade_graph_is_published_live(scene_name):
         assert scene.nodes_with_label("desk") == [ydsg.NodeSymbol("O", 1).value]
         assert scene.nodes_with_label("chair") == []
         assert scene.nearest_nodes([4.0, 0.0, 0.5], 1)[0][0] == ydsg.NodeSymbol("O", 1).value
+
+
+def test_writes_to_a_per_room_layout(small_office, tmp_path):
+    """A mint .ygg (objects in per-room layers) takes the facade's writes."""
+    path = tmp_path / "mint.ygg"
+    yggdrasil.SceneGraph.import_spark_dsg(small_office / "office.json", layout="mint").save(path)
+    G = ydsg.load(path)
+    rooms = [n.id.value for n in G.get_layer(ydsg.DsgLayers.ROOMS).nodes]
+    by_room = {}
+    for o in G.get_layer(ydsg.DsgLayers.OBJECTS).nodes:
+        by_room.setdefault(o.get_parent(), []).append(o.id.value)
+    a, b = (objs[0] for objs in list(by_room.values())[:2])
+    assert G.insert_edge(a, b) and b in G.get_node(a).siblings()  # two rooms' objects
+    attrs = ydsg.ObjectNodeAttributes()
+    attrs.name = "unicorn"
+    new = ydsg.NodeSymbol("O", 99999)
+    assert G.add_node(ydsg.DsgLayers.OBJECTS, new, attrs)
+    assert G.insert_edge(rooms[0], new)
+    assert G.remove_edge(a, b)
+    scene = G.scene
+    assert scene.nodes_with_label("unicorn") == [new.value]
+    assert scene.parent(new.value) == rooms[0]
+    assert G.get_node(new).get_parent() == rooms[0]

@@ -410,6 +410,8 @@ class DynamicSceneGraph:
         self._store_layers: Dict[_Key, str] = {}
         self._layer_edges: Set[Tuple[str, str]] = set()
         self._nested: Dict[int, int] = {}
+        # a node's Yggdrasil layer when it is not its key's (a per-room layout's objects)
+        self._node_store: Dict[int, str] = {}
         if isinstance(empty, (list, tuple)):
             for k in empty:
                 self._layer((k.layer, k.partition))
@@ -476,7 +478,8 @@ class DynamicSceneGraph:
             if key is None:
                 continue
             visible.add(store)
-            layer = self._layer(key, store)
+            per_room = store.startswith(_ROOM_PREFIX)  # one of many Yggdrasil layers of the key
+            layer = self._layer(key, None if per_room else store)
             if key in _CONVENTIONAL and key != (2, 97):
                 self._names.setdefault(_CONVENTIONAL[key], key)
             cls = _default_attributes(key)
@@ -502,6 +505,8 @@ class DynamicSceneGraph:
                 attrs._owner = node
                 members[nid] = node
                 nodes[nid] = node
+                if per_room:
+                    self._node_store[nid] = store
             parents.extend(zip(ids, parent_ids))
             edges.extend(layer_edges)
         children: Dict[int, Set[int]] = {}
@@ -631,6 +636,13 @@ class DynamicSceneGraph:
             self._edit("layer", name)
         return name
 
+    def _store_of(self, node: SceneGraphNode) -> str:
+        """The Yggdrasil layer holding ``node``."""
+        nid = node.id.value
+        if nid in self._node_store:
+            return self._node_store[nid]
+        return self._store_layer((node.layer.layer, node.layer.partition))
+
     def _mirror_add(self, node: SceneGraphNode, key: _Key) -> None:
         # the hottest write: its edits appended inline (as _edit and _mirror_labels would)
         if self._g is None:
@@ -681,8 +693,7 @@ class DynamicSceneGraph:
         cid = child.id.value
         if cid in self._nested:
             return  # Yggdrasil nests a node under one parent; spark_dsg's others stay here
-        pl = self._store_layer((parent.layer.layer, parent.layer.partition))
-        cl = self._store_layer((child.layer.layer, child.layer.partition))
+        pl, cl = self._store_of(parent), self._store_of(child)
         if (pl, cl) not in self._layer_edges:
             self._edit("layer_edge", pl, cl)
             self._layer_edges.add((pl, cl))
@@ -862,7 +873,8 @@ class DynamicSceneGraph:
             layer.edges[k] = SceneGraphEdge(s, t, info)
             _add(a, "_siblings", t)
             _add(b, "_siblings", s)
-            self._edit("add_edge", s, t)
+            if not self._node_store or self._store_of(a) == self._store_of(b):
+                self._edit("add_edge", s, t)  # (two rooms' objects in a per-room layout: not mirrored)
             return True
         if k in self._inter:
             return False
@@ -893,7 +905,8 @@ class DynamicSceneGraph:
                 return False
             _discard(a, "_siblings", t)
             _discard(b, "_siblings", s)
-            self._edit("unlink", edge.source, edge.target)
+            if not self._node_store or self._store_of(a) == self._store_of(b):
+                self._edit("unlink", edge.source, edge.target)
             return True
         if self._inter.pop(k, None) is None:
             return False
