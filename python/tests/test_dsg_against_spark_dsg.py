@@ -115,8 +115,11 @@ def test_loaded_files_read_as_spark_dsg_reads_them(small_office, which):
         assert dict(mine.metadata.get()) == dict(theirs.metadata.get())
         assert mine.has_mesh() == theirs.has_mesh()
         if theirs.has_mesh():
-            assert mine.mesh.num_vertices() == theirs.mesh.num_vertices()
-            assert mine.mesh.num_faces() == theirs.mesh.num_faces()
+            a, b = mine.mesh, theirs.mesh
+            assert (a.num_vertices(), a.num_faces()) == (b.num_vertices(), b.num_faces())
+            assert np.allclose(a.get_vertices(), b.get_vertices(), atol=1e-6)  # positions, colors
+            assert np.array_equal(a.get_faces(), b.get_faces())
+            assert a.get_labels() == b.get_labels()
 
 
 def random_calls(dsg, seed):

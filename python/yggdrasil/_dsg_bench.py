@@ -196,10 +196,21 @@ def run(out: str, reps: int, machine: Dict[str, object]) -> int:
     rows.append(("insert_edge (places, in one layer)", m, t, "µs per call"))
     _log(f"insert_edge: {m:.2f} µs vs {t:.2f} µs")
 
+    def load_and_convert(load, convert):
+        def go():
+            convert(load(office_json))
+        return go
+
+    m = _median(load_and_convert(ydsg.DynamicSceneGraph.load, ydsg.graph_to_networkx), reps)
+    t = _median(load_and_convert(lambda p: spark_dsg.DynamicSceneGraph.load(str(p)), snx.graph_to_networkx), reps)
+    rows.append(("load office (JSON), then graph_to_networkx: every attribute of every node read once", m * 1e3, t * 1e3, "ms"))
+    _log(f"load + graph_to_networkx: {m * 1e3:.1f} ms vs {t * 1e3:.1f} ms")
+
     office_mine, office_theirs = ydsg.load(office_json), spark_dsg.DynamicSceneGraph.load(str(office_json))
+    ydsg.graph_to_networkx(office_mine)  # the fields a scene does not keep: read from the file once
     m = _median(lambda: ydsg.graph_to_networkx(office_mine), reps)
     t = _median(lambda: snx.graph_to_networkx(office_theirs), reps)
-    rows.append(("graph_to_networkx (office)", m * 1e3, t * 1e3, "ms"))
+    rows.append(("graph_to_networkx (office, loaded and converted once before)", m * 1e3, t * 1e3, "ms"))
     _log(f"graph_to_networkx: {m * 1e3:.1f} ms vs {t * 1e3:.1f} ms")
 
     _write(out, rows, reps, machine, n)

@@ -2,14 +2,14 @@
 
 A ``DynamicSceneGraph`` keeps spark_dsg's structure (layers by key, nodes with their
 attribute objects, parents, children, siblings, edges with their attributes) as Python
-objects and mirrors every write into a ``yggdrasil.SceneGraph``: ``G.scene`` is a
-snapshot of that graph, taken when asked after a write, on which every Yggdrasil query
-answers. A graph loaded from a file starts from the file's ``Scene``: its nodes, their
-kept fields (position, name, semantic label, box), nesting and layer edges are read
-from the scene in place; the attribute fields a scene does not keep (``color``,
-``world_R_object``, ...) and the edge weights are read from the file the first time
-one of them is asked for (Spark-DSG JSON; from a binary file or a ``.ygg`` they take
-spark_dsg's defaults).
+objects, and every write logs its edits of a ``yggdrasil.SceneGraph``; the log is
+applied before that graph is read (``G.scene``, a snapshot on which every Yggdrasil
+query answers, ``G.scene_graph``, ``save``). A graph loaded from a file starts from the
+file's ``Scene``: on first use its nodes, their kept fields (position, name, semantic
+label, box), nesting and layer edges are read from the scene, one pass per layer; the
+attribute fields a scene does not keep (``color``, ``world_R_object``, ...) and the edge
+weights are read from the file the first time one of them is asked for (Spark-DSG JSON,
+parsed whole; from a binary file or a ``.ygg`` they take spark_dsg's defaults).
 """
 from __future__ import annotations
 
@@ -368,24 +368,45 @@ class SceneGraphLayer(_LayerReads):
 
 
 class _FileExtras:
-    """What a Yggdrasil scene does not keep, read from the Spark-DSG JSON file once."""
+    """What a Yggdrasil scene does not keep, read from a Spark-DSG JSON file once: each
+    node's attributes and each edge's info as JSON text (parsed when that node or edge
+    asks), the metadata, and the mesh (parsed when asked for)."""
 
     def __init__(self, path: Optional[str]):
-        self.nodes: Dict[int, Dict[str, Any]] = {}
-        self.edges: Dict[_Key, Dict[str, Any]] = {}
+        self._nodes: Dict[int, Any] = {}
+        self._edges: Dict[_Key, Any] = {}
         self.metadata: Dict[str, Any] = {}
-        self.mesh: Optional[Dict[str, Any]] = None
+        self._mesh: Any = None
         if path is None:
             return
-        opener = gzip.open if path.endswith(".gz") else open
-        with opener(path, "rt") as f:
-            d = json.load(f)
-        for n in d.get("nodes") or []:
-            self.nodes[int(n["id"])] = n.get("attributes") or {}
-        for e in d.get("edges") or []:
-            self.edges[_edge_key(int(e["source"]), int(e["target"]))] = e.get("info") or {}
-        self.metadata = dict(d.get("metadata") or {})
-        self.mesh = d.get("mesh")
+        if path.endswith(".gz"):
+            with gzip.open(path, "rt") as f:
+                d = json.load(f)
+            nodes = [(n["id"], n.get("attributes")) for n in d.get("nodes") or []]
+            edges = [(e["source"], e["target"], e.get("info")) for e in d.get("edges") or []]
+            metadata, self._mesh = d.get("metadata"), d.get("mesh")
+        else:
+            nodes, edges, metadata, self._mesh = _yggdrasil.spark_dsg_json_parts(path)
+            metadata = json.loads(metadata) if metadata is not None else None
+        self._nodes = dict(nodes)
+        self._edges = {_edge_key(s, t): info for s, t, info in edges}
+        self.metadata = dict(metadata or {})
+
+    @staticmethod
+    def _parsed(v: Any) -> Optional[Dict[str, Any]]:
+        return json.loads(v) if isinstance(v, str) else v
+
+    def node(self, nid: int) -> Optional[Dict[str, Any]]:
+        """The node's attributes object, or ``None``."""
+        return self._parsed(self._nodes.get(nid))
+
+    def edge(self, key: _Key) -> Optional[Dict[str, Any]]:
+        """The edge's info object, or ``None``."""
+        return self._parsed(self._edges.get(key))
+
+    def mesh_source(self) -> Any:
+        """The mesh object as JSON text or parsed, or ``None``."""
+        return self._mesh
 
 
 class DynamicSceneGraph:
@@ -402,6 +423,7 @@ class DynamicSceneGraph:
         self._extras: Optional[_FileExtras] = None
         self._extras_path: Optional[str] = None
         self._pending_file = False
+        self._pending_mesh = False
         # the Yggdrasil side: a SceneGraph mirroring every write, its snapshot
         self._g: Optional[_yggdrasil.SceneGraph] = _yggdrasil.SceneGraph()
         self._scene: Optional[_yggdrasil.Scene] = None
@@ -439,7 +461,7 @@ class DynamicSceneGraph:
             G._scene = G._base = G._g.snapshot()
             if path.endswith((".json", ".json.gz")):
                 G._extras_path = path
-        G._pending_file = True
+        G._pending_file = G._pending_mesh = True
         # nodes are built from the scene when first asked for (see __getattr__)
         del G._layers, G._nodes, G._inter, G._names
         return G
@@ -550,13 +572,13 @@ class DynamicSceneGraph:
         return self._extras
 
     def _fill_from_file(self, attrs: NodeAttributes) -> None:
-        attrs._fill(self._file().nodes.get(attrs._owner.id.value))
+        attrs._fill(self._file().node(attrs._owner.id.value))
 
     def _edge_info(self, source: int, target: int) -> EdgeAttributes:
-        return EdgeAttributes._from_json(self._file().edges.get(_edge_key(source, target)))
+        return EdgeAttributes._from_json(self._file().edge(_edge_key(source, target)))
 
     def _graph_extras(self) -> None:
-        """Reads the graph's metadata, labelspaces and mesh from the file, once."""
+        """Reads the graph's metadata and labelspaces from the file, once."""
         if not self._pending_file:
             return
         self._pending_file = False
@@ -567,8 +589,17 @@ class DynamicSceneGraph:
             if key is not None:
                 self._labelspaces[key] = Labelspace({int(i): str(n) for i, n in entries})
         self._metadata = Metadata(data)
-        if x.mesh is not None and self._mesh is None:
-            self._mesh = Mesh._from_json(x.mesh)
+
+    def _mesh_extras(self) -> None:
+        """Reads the mesh from the file, once."""
+        if not self._pending_mesh:
+            return
+        self._pending_mesh = False
+        mesh = self._file().mesh_source()
+        if isinstance(mesh, str):  # the text of a mesh object
+            self._mesh = Mesh._from_arrays(_yggdrasil.spark_dsg_json_mesh(mesh))
+        elif mesh is not None:  # a parsed mesh object (a .json.gz)
+            self._mesh = Mesh._from_json(mesh)
 
     # ------------------------------------------------------------ the Yggdrasil side
     #
@@ -999,18 +1030,18 @@ class DynamicSceneGraph:
 
     def has_mesh(self) -> bool:
         """Whether the graph has a mesh."""
-        self._graph_extras()
+        self._mesh_extras()
         return self._mesh is not None
 
     @property
     def mesh(self) -> Optional[Mesh]:
         """The scene mesh (``None`` if there is none)."""
-        self._graph_extras()
+        self._mesh_extras()
         return self._mesh
 
     @mesh.setter
     def mesh(self, mesh: Optional[Mesh]) -> None:
-        self._graph_extras()
+        self._pending_mesh = False
         self._mesh = mesh
 
     def set_mesh(self, mesh: Optional[Mesh]) -> None:
@@ -1066,8 +1097,9 @@ class DynamicSceneGraph:
             "multigraph": False,
             "nodes": nodes,
         }
-        if include_mesh and self._mesh is not None:
-            out["mesh"] = self._mesh._to_json()
+        mesh = self.mesh if include_mesh else None
+        if mesh is not None:
+            out["mesh"] = mesh._to_json()
         return out
 
     def clone(self) -> "DynamicSceneGraph":
@@ -1083,7 +1115,7 @@ class DynamicSceneGraph:
             G.insert_edge(e.source, e.target, e.info)
         G._metadata = Metadata(json.loads(json.dumps(self.metadata._data)))
         G._labelspaces = {k: Labelspace(v.labels_to_names) for k, v in self._labelspaces.items()}
-        G._mesh = self._mesh.clone() if self._mesh is not None else None
+        G._mesh = self.mesh.clone() if self.mesh is not None else None
         return G
 
     def __repr__(self) -> str:

@@ -198,6 +198,14 @@ class Mesh:
         }
 
     @classmethod
+    def _from_arrays(cls, parts) -> "Mesh":
+        """A mesh from ``_yggdrasil.spark_dsg_json_mesh``'s flags and arrays."""
+        flags, points, colors, stamps, labels, first_seen, faces = parts
+        m = cls(*flags)
+        m._points, m._colors, m._stamps, m._labels, m._first_seen, m._faces = points, colors, stamps, labels, first_seen, faces
+        return m
+
+    @classmethod
     def _from_json(cls, d: Dict[str, Any]) -> "Mesh":
         m = cls(d.get("has_colors", True), d.get("has_timestamps", True), d.get("has_labels", True), d.get("has_first_seen_stamps", True))
         m._points = np.asarray(d.get("points") or np.zeros((0, 3)), dtype=np.float32).reshape(-1, 3)
