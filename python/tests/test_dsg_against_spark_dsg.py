@@ -213,6 +213,21 @@ def test_random_calls_build_the_graph_spark_dsg_builds(tmp_path, seed):
     assert hit and hit[0][1] == pytest.approx(0.0, abs=1e-5)
 
 
+def test_a_scene_is_read_in_place_and_copied_on_the_first_write(small_office):
+    graph = yggdrasil.SceneGraph.import_spark_dsg(small_office / "office.json", layout="vanilla")
+    scene = graph.snapshot()
+    G = ydsg.DynamicSceneGraph.from_scene(scene)
+    theirs = spark_dsg.DynamicSceneGraph.load(str(small_office / "office.json"))
+    assert G.num_nodes() == theirs.num_nodes()
+    some = next(iter(theirs.get_layer(spark_dsg.DsgLayers.OBJECTS).nodes))
+    assert np.allclose(G.get_node(some.id.value).attributes.position, some.attributes.position, atol=1e-5)
+    assert G.scene is scene
+    assert G.remove_node(some.id.value)
+    assert not G.scene.has_node(some.id.value) and scene.has_node(some.id.value)
+    with pytest.raises(TypeError, match="DynamicSceneGraph.from_scene"):
+        ydsg.DynamicSceneGraph(scene)
+
+
 def test_writes_reach_yggdrasil_queries_live():
     G = ydsg.DynamicSceneGraph()
     attrs = ydsg.ObjectNodeAttributes()

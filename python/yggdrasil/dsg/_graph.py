@@ -434,6 +434,11 @@ class DynamicSceneGraph:
         self._nested: Dict[int, int] = {}
         # a node's Yggdrasil layer when it is not its key's (a per-room layout's objects)
         self._node_store: Dict[int, str] = {}
+        if not isinstance(empty, (bool, list, tuple)):
+            raise TypeError(
+                f"DynamicSceneGraph(empty: bool) or (layer_keys, layer_names), not {type(empty).__name__}"
+                " (a yggdrasil.Scene: DynamicSceneGraph.from_scene)"
+            )
         if isinstance(empty, (list, tuple)):
             for k in empty:
                 self._layer((k.layer, k.partition))
@@ -452,15 +457,25 @@ class DynamicSceneGraph:
         path = os.fspath(path)
         if isinstance(path, bytes):
             path = path.decode()
-        G = DynamicSceneGraph(empty=True)
         if path.endswith(".ygg"):
-            G._g = None
-            G._scene = G._base = _yggdrasil.open(path)
-        else:
-            G._g = _yggdrasil.SceneGraph.import_spark_dsg(path, layout="vanilla")
-            G._scene = G._base = G._g.snapshot()
-            if path.endswith((".json", ".json.gz")):
-                G._extras_path = path
+            return DynamicSceneGraph.from_scene(_yggdrasil.open(path))
+        graph = _yggdrasil.SceneGraph.import_spark_dsg(path, layout="vanilla")
+        G = DynamicSceneGraph.from_scene(graph.snapshot())
+        G._g = graph
+        if path.endswith((".json", ".json.gz")):
+            G._extras_path = path
+        return G
+
+    @staticmethod
+    def from_scene(scene: "_yggdrasil.Scene") -> "DynamicSceneGraph":
+        """The graph of a ``yggdrasil.Scene`` (a mapped ``.ygg``, a live reader's snapshot,
+        ``SceneGraph.snapshot()``), read in place; the first write copies it into an
+        editable graph (``scene.subgraph``), the scene itself never changes."""
+        if not isinstance(scene, _yggdrasil.Scene):
+            raise TypeError(f"from_scene takes a yggdrasil.Scene, not {type(scene).__name__}")
+        G = DynamicSceneGraph(empty=True)
+        G._g = None
+        G._scene = G._base = scene
         G._pending_file = G._pending_mesh = True
         # nodes are built from the scene when first asked for (see __getattr__)
         del G._layers, G._nodes, G._inter, G._names
