@@ -239,9 +239,21 @@ def test_writes_reach_yggdrasil_queries_live():
     node.attributes.position = np.array([7.0, 7.0, 7.0])
     node.attributes.name = "desk"
     assert G.scene.nodes_with_label("chair") == []
-    assert G.scene.nearest_nodes([7, 7, 7], 1)[0] == (node.id.value, pytest.approx(0.0))
+    assert G.scene.objects.nearest([7, 7, 6]) == node.id.value
+    assert G.scene.objects.within([7, 7, 7], 0.1) == [node.id.value]
+    # an object's geometry is the mesh vertices it claims
+    mesh = ydsg.Mesh()
+    mesh.resize_vertices(3)
+    for i, p in enumerate(([0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0])):
+        mesh.set_pos(i, p)
+    G.mesh = mesh
+    node.attributes.mesh_connections = [1, 2]
+    assert G.scene.objects.nearest([9.0, 0.0, 0.0]) == node.id.value
+    assert G.scene.objects.within([10.0, 0.0, 0.0], 0.01) == [node.id.value]
+    assert G.scene.objects.within([7, 7, 7], 0.1) == []
     G.remove_node(node.id)
     assert not G.scene.has_node(node.id.value)
+    assert G.scene.objects.nearest([9.0, 0.0, 0.0]) is None
 
 
 def test_bad_input_names_what_is_wrong(tmp_path):
@@ -318,7 +330,7 @@ def test_a_facade_graph_is_published_live(scene_name):
         scene = reader.wait_next(10)
         assert scene.nodes_with_label("desk") == [ydsg.NodeSymbol("O", 1).value]
         assert scene.nodes_with_label("chair") == []
-        assert scene.nearest_nodes([4.0, 0.0, 0.5], 1)[0][0] == ydsg.NodeSymbol("O", 1).value
+        assert scene.objects.nearest([4.0, 0.0, 0.6]) == ydsg.NodeSymbol("O", 1).value
 
 
 def test_writes_to_a_per_room_layout(small_office, tmp_path):

@@ -46,6 +46,11 @@ from ._types import (
 
 _Key = Tuple[int, int]
 _new = object.__new__
+_OBJECTS: _Key = (2, 0)
+_MESH: _Key = (1, 0)
+_MESH_LAYER = "MESH"  # (ygg_dsg's name for layer 1, which holds the objects' geometry)
+_GEOMETRY_PREFIX = 0xF5 << 56  # the geometry nodes of objects added here (ygg_dsg's layouts use 0xF0-0xF4)
+_LOW56 = (1 << 56) - 1
 _EMPTY: AbstractSet[int] = frozenset()
 
 
@@ -73,6 +78,8 @@ _HEADER = {"project_name": "main", "version": {"major": 1, "minor": 1, "patch": 
 
 def _store_name(key: _Key) -> str:
     """The Yggdrasil layer name of a Spark-DSG layer key (as ``ygg_dsg`` names them)."""
+    if key == _MESH:
+        return _MESH_LAYER
     if key in _CONVENTIONAL:
         return _CONVENTIONAL[key]
     layer, p = key
@@ -434,6 +441,9 @@ class DynamicSceneGraph:
         self._nested: Dict[int, int] = {}
         # a node's Yggdrasil layer when it is not its key's (a per-room layout's objects)
         self._node_store: Dict[int, str] = {}
+        # objects added here: their geometry node, and those whose geometry changed
+        self._geometry_nodes: Dict[int, int] = {}
+        self._moved_objects: Set[int] = set()
         if not isinstance(empty, (bool, list, tuple)):
             raise TypeError(
                 f"DynamicSceneGraph(empty: bool) or (layer_keys, layer_names), not {type(empty).__name__}"
@@ -625,7 +635,7 @@ class DynamicSceneGraph:
     def scene(self) -> "_yggdrasil.Scene":
         """The graph as a ``yggdrasil.Scene`` (a snapshot taken after the last write),
         for Yggdrasil's queries: ``G.scene.objects.nearest(p)``, ``G.scene.nearest_nodes``, ..."""
-        if self._log:
+        if self._log or self._moved_objects:
             self._flush()
         if self._scene is None:
             self._scene = self._g.snapshot()
@@ -674,6 +684,10 @@ class DynamicSceneGraph:
                 g.set_feature(a, b, c)
             elif kind != "noop":
                 getattr(g, kind)(*(x for x in (a, b) if x is not None))
+        moved, self._moved_objects = self._moved_objects, set()
+        for nid in moved:
+            if nid in self._geometry_nodes:
+                g.set_geometry(self._geometry_nodes[nid], self._object_points(nid))
 
     def _store_layer(self, key: _Key) -> str:
         name = self._store_layers.get(key)
@@ -698,8 +712,11 @@ class DynamicSceneGraph:
         layer = self._store_layers.get(key) or self._store_layer(key)
         log = self._log
         log.extend(("add_node", nid, layer, None))
-        log.extend(("set_geometry", nid, attrs._position, None))
         self._scene = None
+        if key == _OBJECTS:
+            self._add_object_geometry(node, layer)
+        else:
+            log.extend(("set_geometry", nid, attrs._position, None))
         if isinstance(attrs, SemanticNodeAttributes):
             name, label = attrs._name, attrs._semantic_label
             if name and not (name[-1] == ")" and name == node.id.str()):
@@ -713,7 +730,48 @@ class DynamicSceneGraph:
                 log.extend(("set_feature", nid, "semantic_label", label))
 
     def _mirror_position(self, node: SceneGraphNode, attrs: NodeAttributes) -> None:
-        self._edit("set_geometry", node.id.value, attrs._position)
+        if node.layer.layer == 2 and node.layer.partition == 0:
+            # (an object loaded from a file keeps the geometry node it was loaded with)
+            self._object_moved(node.id.value, attrs)
+        else:
+            self._edit("set_geometry", node.id.value, attrs._position)
+
+    # Objects as Yggdrasil's object queries see them (as ygg_dsg's vanilla layout builds
+    # them): the position in features, the geometry in a nested MESH node holding the
+    # mesh vertices the object claims (``mesh_connections`` into ``G.mesh``), or its
+    # position when it claims none. The geometry is worked out when the log is applied.
+    def _add_object_geometry(self, node: SceneGraphNode, layer: str) -> None:
+        nid = node.id.value
+        mid = _GEOMETRY_PREFIX | (nid & _LOW56)
+        taken = set(self._geometry_nodes.values())
+        while mid in taken or (self._base is not None and self._base.has_node(mid)):
+            mid = _GEOMETRY_PREFIX | ((mid + 1) & _LOW56)
+        self._geometry_nodes[nid] = mid
+        self._store_layer(_MESH)
+        if (layer, _MESH_LAYER) not in self._layer_edges:
+            self._edit("layer_edge", layer, _MESH_LAYER)
+            self._layer_edges.add((layer, _MESH_LAYER))
+        self._edit("add_node", mid, _MESH_LAYER)
+        self._edit("nest", nid, mid)
+        self._object_moved(nid, node.attributes)
+
+    def _object_moved(self, nid: int, attrs: NodeAttributes) -> None:
+        x, y, z = attrs._position.tolist()
+        self._edit("set_feature", nid, "position_x", x)
+        self._edit("set_feature", nid, "position_y", y)
+        self._edit("set_feature", nid, "position_z", z)
+        if nid in self._geometry_nodes:
+            self._moved_objects.add(nid)
+
+    def _object_points(self, nid: int) -> np.ndarray:
+        attrs = self._nodes[nid].attributes
+        mesh, claimed = self._mesh, attrs._mesh_connections
+        if mesh is not None and claimed:
+            index = np.unique(np.asarray(claimed, dtype=np.int64))
+            index = index[(index >= 0) & (index < mesh.num_vertices())]
+            if len(index):
+                return mesh._points[index]
+        return attrs._position.reshape(1, 3)
 
     def _mirror_labels(self, node: SceneGraphNode, attrs: SemanticNodeAttributes) -> None:
         nid = node.id.value
@@ -879,6 +937,9 @@ class DynamicSceneGraph:
         del self._layers[(node.layer.layer, node.layer.partition)].nodes[i]
         del self._nodes[i]
         self._edit("remove_node", i)
+        if i in self._geometry_nodes:
+            self._edit("remove_node", self._geometry_nodes.pop(i))
+            self._moved_objects.discard(i)
         self._nested.pop(i, None)
         node._graph = None
         node.attributes._owner = None
@@ -1058,6 +1119,8 @@ class DynamicSceneGraph:
     def mesh(self, mesh: Optional[Mesh]) -> None:
         self._pending_mesh = False
         self._mesh = mesh
+        self._moved_objects.update(self._geometry_nodes)  # their claimed vertices moved
+        self._scene = None
 
     def set_mesh(self, mesh: Optional[Mesh]) -> None:
         """Sets the scene mesh."""

@@ -521,6 +521,8 @@ def _value_property(name: str) -> property:
 
     def set(self, value):
         setattr(self, slot, store(value))
+        if name == "mesh_connections" and self._owner is not None:
+            self._owner._moved(self)  # an object's geometry is the vertices it claims
 
     return property(get, set, doc=f"``{name}`` (a copy; assign a new value to change it).")
 
