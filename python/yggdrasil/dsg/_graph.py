@@ -765,8 +765,9 @@ class DynamicSceneGraph:
 
     def _object_points(self, nid: int) -> np.ndarray:
         attrs = self._nodes[nid].attributes
-        mesh, claimed = self._mesh, attrs._mesh_connections
-        if mesh is not None and claimed:
+        claimed = attrs._mesh_connections
+        mesh = self.mesh if claimed else None  # (a loaded file's mesh is read on first use)
+        if mesh is not None:
             index = np.unique(np.asarray(claimed, dtype=np.int64))
             index = index[(index >= 0) & (index < mesh.num_vertices())]
             if len(index):
