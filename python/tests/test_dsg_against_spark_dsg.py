@@ -228,6 +228,17 @@ def test_a_scene_is_read_in_place_and_copied_on_the_first_write(small_office):
         ydsg.DynamicSceneGraph(scene)
 
 
+def test_a_loaded_object_renamed_loses_its_old_labels(small_office):
+    G = ydsg.load(small_office / "office.json")
+    node = next(n for n in G.get_layer(ydsg.DsgLayers.OBJECTS).nodes if n.attributes.name)
+    old = set(G.scene.node(node.id.value).labels)
+    assert old  # the import labels objects by name and semantic label
+    node.attributes.name = "unicorn"
+    node.attributes.semantic_label = 12345
+    assert set(G.scene.node(node.id.value).labels) == {"unicorn", "12345"}
+    assert G.scene.nodes_with_label("unicorn") == [node.id.value]
+
+
 def test_writes_reach_yggdrasil_queries_live():
     G = ydsg.DynamicSceneGraph()
     attrs = ydsg.ObjectNodeAttributes()

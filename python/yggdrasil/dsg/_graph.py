@@ -159,7 +159,8 @@ class SceneGraphNode:
         self._children: AbstractSet[int] = _EMPTY
         self._siblings: AbstractSet[int] = _EMPTY
         self._graph = graph
-        self._labels: Tuple[str, ...] = ()
+        # the labels given to Yggdrasil (None: those of the scene it was read from)
+        self._labels: Optional[Tuple[str, ...]] = ()
 
     def get_parent(self) -> Optional[int]:
         """The parent's id when the node has exactly one parent, else ``None``."""
@@ -547,7 +548,7 @@ class DynamicSceneGraph:
                 node = new(SceneGraphNode)
                 node.id = symbol = new(NodeSymbol)
                 symbol.value = nid
-                node.layer, node.attributes, node._graph, node._labels = lkey, attrs, self, ()
+                node.layer, node.attributes, node._graph, node._labels = lkey, attrs, self, None
                 node._parents = node._children = node._siblings = _EMPTY
                 attrs._owner = node
                 members[nid] = node
@@ -782,11 +783,15 @@ class DynamicSceneGraph:
             labels = (name,)
         if label != NO_SEMANTIC_LABEL:
             labels += (str(label),)
-        for old in node._labels:
+        current = node._labels
+        if current is None:  # a node read from a scene: the labels the scene gave it
+            base = self._base
+            current = tuple(base.node(nid).labels) if base is not None and base.has_node(nid) else ()
+        for old in current:
             if old not in labels:
                 self._edit("remove_label", nid, old)
         for new in labels:
-            if new not in node._labels:
+            if new not in current:
                 self._edit("add_label", nid, new)
         node._labels = labels
         if name:
