@@ -43,6 +43,8 @@ fn _yggdrasil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(files::open, m)?)?;
     m.add_function(wrap_pyfunction!(files::write_office, m)?)?;
     m.add_function(wrap_pyfunction!(files::office_graph, m)?)?;
+    m.add_function(wrap_pyfunction!(files::spark_dsg_json_parts, m)?)?;
+    m.add_function(wrap_pyfunction!(files::spark_dsg_json_mesh, m)?)?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<node::Node>()?;
     m.add_class::<node::Layer>()?;

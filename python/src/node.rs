@@ -3,15 +3,28 @@
 
 use std::sync::Arc;
 
-use numpy::PyArray2;
+use numpy::{PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use ygg_store::{LayerId, NodeId, SceneView};
+use ygg_dsg::layout::STORED_BOX_FEATURES;
+use ygg_store::{FeatureRef, LayerId, NodeId, SceneView};
 
 use crate::convert::feature_to_py;
 use crate::errors::{unknown_layer, unknown_node};
 use crate::points::{SnapshotOwner, points_array};
 use crate::snapshot::SnapshotView;
+
+/// `Layer.spark_dsg_columns`: ids, positions, names, semantic labels, stored boxes,
+/// parents and the edges leaving the layer's nodes.
+type SparkDsgColumns<'py> = (
+    Vec<u64>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+    Vec<i64>,
+    Vec<Option<[f64; 6]>>,
+    Vec<Option<u64>>,
+    Vec<(u64, u64)>,
+);
 
 /// An axis-aligned box as `((min_x, min_y, min_z), (max_x, max_y, max_z))`.
 type BoxTuple = ((f32, f32, f32), (f32, f32, f32));
@@ -193,6 +206,79 @@ impl Layer {
 
     fn __len__(&self) -> usize {
         self.snapshot.view().layer_len(self.id)
+    }
+
+    /// The layer as the columns `yggdrasil.dsg` builds its nodes from, in one pass, rows
+    /// ascending by id: `(ids, positions, names, semantic_labels, boxes, parents, edges)`.
+    /// `positions` is an `(n, 3)` `float64` array (the `position_x/y/z` features, else the
+    /// first point, else zeros); `names` `""` and `semantic_labels` `2**32 - 1` where the
+    /// node has none; `boxes` the six stored Spark-DSG box features or `None`; `parents`
+    /// the parent id or `None`; `edges` every `(source, target)` leaving the layer's nodes.
+    fn spark_dsg_columns<'py>(&self, py: Python<'py>) -> SparkDsgColumns<'py> {
+        let v = self.snapshot.view();
+        let mut nodes: Vec<_> = v
+            .layer_nodes(self.id)
+            .map(|n| (v.node_id(n).0, n))
+            .collect();
+        nodes.sort_unstable_by_key(|&(id, _)| id);
+        let n = nodes.len();
+        let (mut ids, mut positions, mut names) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n * 3),
+            Vec::with_capacity(n),
+        );
+        let (mut labels, mut boxes, mut parents) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        let mut edges = Vec::new();
+        for (id, node) in nodes {
+            ids.push(id);
+            let (mut xyz, mut has_xyz) = ([0.0f64; 3], 0);
+            let (mut name, mut label) = (String::new(), i64::from(u32::MAX));
+            let (mut bbox, mut has_box) = ([0.0f64; 6], 0);
+            for (key, value) in v.features(node) {
+                let number = match value {
+                    FeatureRef::Float(x) => x,
+                    FeatureRef::Int(i) => i as f64,
+                    FeatureRef::Str(s) => {
+                        if key == "name" {
+                            name = s.to_owned();
+                        }
+                        continue;
+                    }
+                    FeatureRef::Bool(_) => continue,
+                };
+                match key {
+                    "semantic_label" => label = number as i64,
+                    "position_x" | "position_y" | "position_z" => {
+                        xyz[usize::from(key.as_bytes()[9] - b'x')] = number;
+                        has_xyz += 1;
+                    }
+                    _ => {
+                        if let Some(i) = STORED_BOX_FEATURES.iter().position(|k| *k == key) {
+                            bbox[i] = number;
+                            has_box += 1;
+                        }
+                    }
+                }
+            }
+            if has_xyz < 3 {
+                let pts = v.points(node);
+                xyz = pts.first().map_or([0.0; 3], |p| p.map(f64::from));
+            }
+            positions.extend_from_slice(&xyz);
+            names.push(name);
+            labels.push(label);
+            boxes.push((has_box == 6).then_some(bbox));
+            parents.push(v.parent(node).map(|p| p.0));
+            edges.extend(v.out_edges(node).map(|e| (e.source.0, e.target.0)));
+        }
+        let positions = numpy::PyArray1::from_vec(py, positions)
+            .reshape([n, 3])
+            .expect("3 numbers per node");
+        (ids, positions, names, labels, boxes, parents, edges)
     }
 
     fn __repr__(&self) -> String {

@@ -17,7 +17,7 @@ Angles are degrees wherever you pass one; ``objects.nearest`` answers an id or `
 ``nearest_nodes_many`` a masked ``uint64`` array (node ids use all 64 bits). The transport prints errors only, unless ``YGG_LOG=warn`` (or
 ``set_log_level("warn")``) asks for more.
 
-spark_dsg-style reading: ``yggdrasil.dsg``.
+spark_dsg 1.1.3's API (reads and writes, over a SceneGraph): ``yggdrasil.dsg``.
 """
 from ._yggdrasil import (
     NO_NODE,

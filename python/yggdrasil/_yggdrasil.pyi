@@ -81,6 +81,28 @@ def write_office(path: _Path, seed: int = 7, scale: float = 1.0) -> None:
 def office_graph(layout: str = "mint", seed: int = 7, scale: float = 1.0) -> SceneGraph:
     """The built-in office in one of the paper's layouts."""
 
+def spark_dsg_json_parts(
+    path: _Path,
+) -> Tuple[List[Tuple[int, str]], List[Tuple[int, int, str]], Optional[str], Optional[str]]:
+    """The parts of a Spark-DSG JSON file ``yggdrasil.dsg`` reads on demand, as JSON text
+    (only their extent parsed, without the GIL): ``(nodes, edges, metadata, mesh)``, each
+    node ``(id, attributes)``, each edge ``(source, target, info)``; raises ``FileError``."""
+
+def spark_dsg_json_mesh(
+    text: str,
+) -> Tuple[
+    Tuple[bool, bool, bool, bool],
+    npt.NDArray[np.float32],
+    npt.NDArray[np.uint8],
+    npt.NDArray[np.uint64],
+    npt.NDArray[np.uint32],
+    npt.NDArray[np.uint64],
+    npt.NDArray[np.uint64],
+]:
+    """A Spark-DSG JSON mesh object's text as numpy arrays: ``(flags, points (n, 3), colors
+    (n, 4), stamps, labels, first_seen_stamps, faces (m, 3))``, the flags ``(has_colors,
+    has_timestamps, has_labels, has_first_seen_stamps)``; raises ``FileError``."""
+
 class Scene:
     """A validated snapshot, queried in place (from ``open``, ``Reader`` or ``SceneGraph.snapshot``)."""
 
@@ -206,6 +228,21 @@ class Layer:
     def parents(self) -> List[str]:
         """Names of the layers encompassing it."""
     def __len__(self) -> int: ...
+    def spark_dsg_columns(
+        self,
+    ) -> Tuple[
+        List[int],
+        npt.NDArray[np.float64],
+        List[str],
+        List[int],
+        List[Optional[Tuple[float, float, float, float, float, float]]],
+        List[Optional[int]],
+        List[Tuple[int, int]],
+    ]:
+        """The layer as the columns ``yggdrasil.dsg`` builds its nodes from, rows ascending by
+        id: ``(ids, positions, names, semantic_labels, boxes, parents, edges)``; positions an
+        ``(n, 3)`` float64 array, ``""`` / ``2**32 - 1`` for no name / label, ``None`` for no
+        stored box or parent, ``edges`` every ``(source, target)`` leaving the layer's nodes."""
 
 class ObjectQueries:
     """The object contract of ``ygg query``: Spark-DSG object ids, ascending."""

@@ -217,9 +217,15 @@ def machine():
     except (OSError, StopIteration):
         pass
     from importlib import metadata
+
+    def version(name):
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "not installed"
     return {"cpu": cpu, "cores": os.cpu_count(), "loadavg": " ".join(f"{x:.2f}" for x in os.getloadavg()),
-            "python": platform.python_version(), "spark_dsg": metadata.version("spark-dsg"),
-            "numpy": np.__version__, "scipy": metadata.version("scipy")}
+            "python": platform.python_version(), "spark_dsg": version("spark-dsg"),
+            "numpy": np.__version__, "scipy": version("scipy")}
 
 
 def main(argv=None):
@@ -228,6 +234,8 @@ def main(argv=None):
     ap.add_argument("--anchor", default="bench/spark_dsg/anchor.py")
     ap.add_argument("--reps", type=int, default=5)
     ap.add_argument("--per-room", type=int, default=64)
+    ap.add_argument("--dsg-api", action="store_true",
+                    help="spark_dsg's API through yggdrasil.dsg against spark_dsg (a section of --out)")
     ap.add_argument("--serve", help=argparse.SUPPRESS)
     ap.add_argument("--serve-object", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--serve-translation", help=argparse.SUPPRESS)
@@ -235,6 +243,9 @@ def main(argv=None):
     if args.serve:
         serve(args.serve, args.serve_object, json.loads(args.serve_translation))
         return 0
+    if args.dsg_api:
+        from . import _dsg_bench
+        return _dsg_bench.run(args.out, args.reps, machine())
 
     import spark_dsg
     anchor = load_anchor(args.anchor)
