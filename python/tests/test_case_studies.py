@@ -1,0 +1,73 @@
+"""The case studies' answer checks (python -m yggdrasil.case_studies), at a small size:
+both backends of each study must give the same answers, and a differing answer must be
+caught."""
+import pathlib
+
+import pytest
+
+import yggdrasil
+
+pytest.importorskip("spark_dsg")
+pytest.importorskip("networkx")
+pytest.importorskip("scipy")
+
+try:
+    import yggdrasil.case_studies  # noqa: F401
+except ImportError:
+    # Running from a source tree whose package was installed before case_studies existed
+    # (the extension is only in the installed copy): read the pure-Python subpackage from
+    # the tree. CI installs the package from the tree, so this branch is not taken there.
+    yggdrasil.__path__.append(str(pathlib.Path(__file__).resolve().parents[1] / "yggdrasil"))
+
+from yggdrasil.case_studies import _lp2_data, lp2  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def home(tmp_path_factory):
+    d = tmp_path_factory.mktemp("lp2")
+    path = _lp2_data.home_file(str(d))
+    return path, _lp2_data.trajectories(path, str(d), 3, seed=5)
+
+
+def test_home_has_the_papers_counts(home):
+    import spark_dsg
+    G = spark_dsg.DynamicSceneGraph.load(home[0])
+    assert G.get_layer(spark_dsg.DsgLayers.PLACES).num_nodes() == 861
+    assert G.get_layer(spark_dsg.DsgLayers.OBJECTS).num_nodes() == 110
+    # parent first, as LP2's scans need: every place is the target of its room's edge
+    rooms = {e.target for e in G.interlayer_edges if spark_dsg.NodeSymbol(e.source).category == "R"}
+    assert len(rooms) == 861
+
+
+def test_lp2_backends_agree_on_every_call(home):
+    path, csvs = home
+    results, prompt, _ = lp2.run_scene("home", path, csvs, reps=1, room_sample=0.2)
+    o, y = results["original"][0], results["yggdrasil"][0]
+    assert o.calls == y.calls                       # the same calls, answered the same
+    assert o.calls[lp2.ROOM] > 1000 and o.calls[lp2.NEAREST] == 2 * len(csvs)
+    assert len(y.ns[lp2.ROOM]) == y.calls[lp2.ROOM]  # every Yggdrasil call timed
+    assert 0 < len(o.ns[lp2.ROOM]) < o.calls[lp2.ROOM]
+    assert "Object classes:" in prompt
+    rows = lp2.scene_rows("home", results)
+    by = {r["operation"]: r for r in rows}
+    # the structural gap: an edge scan per call against a parent pointer
+    assert by[lp2.ROOM]["ratio"] > 20
+    assert by["total graph time"]["ratio"] > 10
+
+
+def test_lp2_catches_a_wrong_room(home):
+    path, csvs = home
+
+    class Wrong(lp2.YggdrasilBackend):
+        def node_data(self, node):
+            x, y, room = super().node_data(node)
+            return x, y, room + 1
+    o, w = lp2.LP2Run(lp2.OriginalBackend(path)), lp2.LP2Run(Wrong(path))
+    for run in (o, w):
+        objects = run.build()
+        labels = {i["node_id"]: i["semantic_class"] for i in objects.values()}
+        position, interactions = _lp2_data.read_trajectory(csvs[0], labels)
+        run.predict(0, position, interactions)
+    with pytest.raises(AssertionError, match="rooms"):
+        lp2.check_equal("home", {"original": (o.objects, o.log), "yggdrasil": (w.objects, w.log)},
+                        {"original": o.prompt(), "yggdrasil": w.prompt()})
