@@ -71,3 +71,35 @@ def test_lp2_catches_a_wrong_room(home):
     with pytest.raises(AssertionError, match="rooms"):
         lp2.check_equal("home", {"original": (o.objects, o.log), "yggdrasil": (w.objects, w.log)},
                         {"original": o.prompt(), "yggdrasil": w.prompt()})
+
+
+def test_s3dsg_cost_fields_agree():
+    from yggdrasil.case_studies import s3dsg
+    clouds, kinds, floor, pairs = s3dsg.apartment(objects=12, relations=10)
+    original = s3dsg.Original(clouds, floor, pairs)
+    ygg = s3dsg.Yggdrasil(clouds, kinds, floor, pairs)
+    assert len(original.trees) == 13
+    assert len(ygg.scene.edges_matching("near")) == 20          # each relation both ways
+    points = s3dsg.grid(30, 24)
+    batch = original.field_batch(points)
+    assert abs(batch - ygg.field_batch(points)).max() < 1e-5
+    assert abs(original.field_one(points[:50]) - ygg.field_one(points[:50])).max() < 1e-5
+    # the clearance really comes from the clouds: a point on an object costs ~1 + social
+    on = clouds[0][:1]
+    assert ygg.field_batch(on)[0] == pytest.approx(original.field_batch(on)[0], abs=1e-5)
+    assert ygg.field_batch(on)[0] >= 1.0 - 1e-6
+
+
+def test_command_writes_the_results(tmp_path):
+    from yggdrasil.case_studies import main
+    import json
+    md = tmp_path / "cs.md"
+    assert main(["--quick", "--quiet", "--study", "S3DSG", "--md", str(md)]) == 0
+    doc = json.loads((tmp_path / "cs.json").read_text())
+    ops = [r["operation"] for r in doc["rows"]]
+    assert ops == ["cost field", "cost field (batch)"]
+    for r in doc["rows"]:
+        assert {"study", "operation", "original_us", "yggdrasil_us", "ratio", "paper_ratio"} <= set(r)
+        assert r["ratio"] == pytest.approx(r["original_us"] / r["yggdrasil_us"])
+    assert (tmp_path / "cs.svg").read_text().startswith("<svg")
+    assert "| S3DSG | cost field |" in md.read_text()

@@ -86,7 +86,7 @@ def write_md(path, doc, svg_name):
         met = "–" if target is None else ("yes" if r["ratio"] >= target else "**no**")
         lines.append(f"| {label(r).split(':')[0]} | {r['operation']} | {_fmt(r['original'])} {unit} | "
                      f"{_fmt(r['yggdrasil'])} {unit} | {r['ratio']:.2f}× | {paper} | "
-                     f"{_fmt(r['paper_ratio'])}× | {'–' if target is None else f'≥ {target:g}×'} | {met} |")
+                     f"{_fmt(r['paper_ratio'])}{'' if r['paper_ratio'] is None else '×'} | {'–' if target is None else f'≥ {target:g}×'} | {met} |")
     lines.append("")
     for section in doc["notes"]:
         lines.append(section)
