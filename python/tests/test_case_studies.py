@@ -103,3 +103,37 @@ def test_command_writes_the_results(tmp_path):
         assert r["ratio"] == pytest.approx(r["original_us"] / r["yggdrasil_us"])
     assert (tmp_path / "cs.svg").read_text().startswith("<svg")
     assert "| S3DSG | cost field |" in md.read_text()
+
+
+def test_osg_prompts_identical_and_a_wrong_one_caught():
+    from yggdrasil.case_studies import osg
+    rows, _ = osg.study(quick=True)
+    by = {r["operation"]: r for r in rows}
+    assert set(by) == {"total graph-update time", *osg.OPS}
+    assert by["total graph-update time"]["original"] == pytest.approx(
+        sum(by[op]["original"] for op in osg.OPS))
+    assert by["get nodes by type"]["ratio"] > 1
+
+    class Wrong(osg.LayeredGraph):
+        def serialize(self):
+            return super().serialize().replace("room", "rooms", 1)
+    with pytest.raises(AssertionError, match="prompt"):
+        osg.study(quick=True, layered=Wrong)
+
+
+def test_osg_layers_hold_is_near_on_shadow_nodes():
+    from yggdrasil.case_studies import osg
+    from yggdrasil.case_studies._common import Timings
+    g = osg.LayeredGraph()
+    t = Timings()
+    t.ns["count instances"] = []
+    e = g.add_node("entrance", "entrance", {}, t)
+    o = g.add_node("object", "chair", {}, t)
+    assert g.add_node("object", "chair", {}, t) == "chair_2"
+    assert g.add_edge(e, o, "is near") and not g.add_edge(e, o, "connects to")
+    scene = g._scene()
+    se, so = g.shadow[g.ids[e]], g.shadow[g.ids[o]]
+    assert scene.node(se).layer == scene.node(so).layer == "PHYSICAL"
+    assert scene.parent(so) == g.ids[o]
+    assert sorted(scene.edges_from(se)) == [(se, so, "is near")]
+    assert sorted(scene.edges_from(so)) == [(so, se, "is near")]
