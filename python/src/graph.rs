@@ -4,10 +4,10 @@
 //! writer's graph, and `Writer.publish()` sends the layers they changed.
 
 use pyo3::prelude::*;
-use ygg_store::{NodeId, SceneGraph, SceneView};
+use ygg_store::{NodeId, SceneGraph, SceneView, query};
 
-use crate::convert::{feature_from_py, points};
-use crate::errors::{MutationError, file_error};
+use crate::convert::{feature_from_py, points, scope};
+use crate::errors::{MutationError, file_error, unknown_node};
 use crate::graph_home::PySceneGraph;
 use crate::scene::Scene;
 use crate::snapshot::SnapshotSource;
@@ -217,6 +217,30 @@ impl PySceneGraph {
     /// keeps its bytes). Raises `FileError` naming the path.
     fn save(&self, path: std::path::PathBuf) -> PyResult<()> {
         self.with(|g| g.save(&path))?.map_err(|e| file_error(&e))
+    }
+
+    /// Nodes carrying `label` (in `layer`, or anywhere), ascending: the query of
+    /// `Scene.nodes_with_label`, answered by the live graph without taking a snapshot.
+    #[pyo3(signature = (label, layer = None))]
+    fn nodes_with_label(&self, label: &str, layer: Option<&str>) -> PyResult<Vec<u64>> {
+        self.with(|g| {
+            let found = query::nodes_with_label(&*g, scope(&*g, layer)?, label);
+            Ok(found.into_iter().map(|n| n.0).collect())
+        })?
+    }
+
+    /// Edges leaving `node` as `(source, target, description)`, ascending by target: the
+    /// query of `Scene.edges_from`, answered by the live graph.
+    fn edges_from(&self, node: u64) -> PyResult<Vec<(u64, u64, String)>> {
+        self.with(|g| {
+            if g.node(NodeId(node)).is_none() {
+                return Err(unknown_node(node));
+            }
+            Ok(query::edges_from(&*g, NodeId(node))
+                .into_iter()
+                .map(|e| (e.source.0, e.target.0, e.description.to_owned()))
+                .collect())
+        })?
     }
 
     /// An archived, validated snapshot of the graph as it is now, queried like a file.

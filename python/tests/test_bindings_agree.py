@@ -147,3 +147,45 @@ def test_the_transport_is_quiet_unless_asked(scene_name, monkeypatch):
         assert "No config file was loaded" in asked, asked
     with pytest.raises(ValueError, match="loud"):
         yggdrasil.set_log_level("loud")
+
+
+def test_the_live_graph_answers_label_and_edge_queries_as_its_snapshot_does():
+    """``SceneGraph.nodes_with_label`` and ``edges_from`` run the store's queries over the
+    live graph: the same answers as a snapshot of it, after every kind of edit."""
+    import random
+
+    rng = random.Random(7)
+    g = yggdrasil.SceneGraph()
+    for layer in ("A", "B"):
+        g.add_layer(layer)
+    labels = ["chair", "desk", "door"]
+    nodes = []
+    for step in range(300):
+        action = rng.random()
+        if action < 0.4 or len(nodes) < 4:
+            n = 1000 + step
+            g.add_node(n, rng.choice(["A", "B"]))
+            nodes.append(n)
+        elif action < 0.6:
+            g.add_label(rng.choice(nodes), rng.choice(labels))
+        elif action < 0.8:
+            a, b = rng.sample(nodes, 2)
+            try:
+                g.add_edge(a, b, rng.choice(["near", "connects to"]))
+            except yggdrasil.MutationError:
+                pass  # an edge already there
+        else:
+            gone = nodes.pop(rng.randrange(len(nodes)))
+            g.remove_node(gone)
+        if step % 25 == 0:
+            s = g.snapshot()
+            for label in labels:
+                for layer in (None, "A", "B"):
+                    assert g.nodes_with_label(label, layer) == s.nodes_with_label(label, layer)
+            for n in nodes:
+                assert g.edges_from(n) == s.edges_from(n)
+    assert any(g.edges_from(n) for n in nodes), "the walk made edges"
+    with pytest.raises(yggdrasil.QueryError, match="unknown node 5"):
+        g.edges_from(5)
+    with pytest.raises(yggdrasil.QueryError, match="unknown layer"):
+        g.nodes_with_label("chair", "C")

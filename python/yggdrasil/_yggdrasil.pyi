@@ -327,6 +327,10 @@ class SceneGraph:
         """Every layer's name."""
     def save(self, path: _Path) -> None:
         """Writes a ``.ygg`` file atomically; raises ``FileError``."""
+    def nodes_with_label(self, label: str, layer: Optional[str] = None) -> List[int]:
+        """``Scene.nodes_with_label`` answered by the live graph (no snapshot)."""
+    def edges_from(self, node: int) -> List[Tuple[int, int, str]]:
+        """``Scene.edges_from`` answered by the live graph (no snapshot)."""
     def snapshot(self) -> Scene:
         """An archived snapshot of the graph as it is now."""
 
