@@ -131,7 +131,7 @@ def test_osg_layers_hold_is_near_on_shadow_nodes():
     o = g.add_node("object", "chair", {}, t)
     assert g.add_node("object", "chair", {}, t) == "chair_2"
     assert g.add_edge(e, o, "is near") and not g.add_edge(e, o, "connects to")
-    scene = g._scene()
+    scene = g.g.snapshot()
     se, so = g.shadow[g.ids[e]], g.shadow[g.ids[o]]
     assert scene.node(se).layer == scene.node(so).layer == "PHYSICAL"
     assert scene.parent(so) == g.ids[o]
