@@ -209,6 +209,15 @@ def after_update_ipc(server, name, q, obj, samples):
 
 
 # ------------------------------------------------------------ main
+def package_version(name):
+    """The installed version of package ``name``, or ``"not installed"``."""
+    from importlib import metadata
+    try:
+        return metadata.version(name)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
 def machine():
     cpu = platform.processor() or platform.machine()
     try:
@@ -216,16 +225,9 @@ def machine():
             cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
-    from importlib import metadata
-
-    def version(name):
-        try:
-            return metadata.version(name)
-        except metadata.PackageNotFoundError:
-            return "not installed"
     return {"cpu": cpu, "cores": os.cpu_count(), "loadavg": " ".join(f"{x:.2f}" for x in os.getloadavg()),
-            "python": platform.python_version(), "spark_dsg": version("spark-dsg"),
-            "numpy": np.__version__, "scipy": version("scipy")}
+            "python": platform.python_version(), "spark_dsg": package_version("spark-dsg"),
+            "numpy": np.__version__, "scipy": package_version("scipy")}
 
 
 def main(argv=None):

@@ -2,12 +2,9 @@
 from __future__ import annotations
 
 import math
-import os
-import platform
 import statistics
 import sys
 import time
-from importlib import metadata
 
 perf_ns = time.perf_counter_ns
 
@@ -69,19 +66,6 @@ class Progress:
 
 
 def machine():
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-
-    def version(name):
-        try:
-            return metadata.version(name)
-        except metadata.PackageNotFoundError:
-            return "not installed"
-    return {"cpu": cpu, "cores": os.cpu_count(),
-            "loadavg": " ".join(f"{x:.2f}" for x in os.getloadavg()),
-            "python": platform.python_version(), "spark_dsg": version("spark-dsg"),
-            "networkx": version("networkx"), "numpy": version("numpy"), "scipy": version("scipy")}
+    """The benchmark's machine facts (``yggdrasil.bench.machine``) and networkx's version."""
+    from ..bench import machine as bench_machine, package_version
+    return {**bench_machine(), "networkx": package_version("networkx")}

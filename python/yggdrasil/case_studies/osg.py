@@ -52,6 +52,16 @@ ROOMS = ("corridor", "office", "office", "meetingroom", "kitchen", "office", "of
 DOORS = ((0, 1), (0, 2), (0, 3), (0, 4), (0, 5), (0, 6), (0, 7), (0, 8), (1, 2), (3, 4), (5, 6), (7, 8))
 
 
+def unique_name(graph, node_type, name, attrs, timings):
+    """OSG's name for a new node, ``<name>_<k>`` after ``count_instances`` (timed on its
+    own); sets ``attrs["type"]``."""
+    attrs["type"] = node_type
+    t0 = perf_ns()
+    k = graph.count_instances(node_type, name)
+    timings.add("count instances", perf_ns() - t0)
+    return f"{name}_{k + 1}"
+
+
 class FlatGraph:
     """OSG's flat NetworkX graph (behaviour of its ``SceneGraph``, with a floor)."""
 
@@ -71,11 +81,7 @@ class FlatGraph:
                     if a["type"] == node_type and n.split("_")[0] == name])
 
     def add_node(self, node_type, name, attrs, timings):
-        attrs["type"] = node_type
-        t0 = perf_ns()
-        k = self.count_instances(node_type, name)
-        timings.add("count instances", perf_ns() - t0)
-        unique = f"{name}_{k + 1}"
+        unique = unique_name(self, node_type, name, attrs, timings)
         self.g.add_nodes_from([(unique, attrs)])
         return unique
 
@@ -132,11 +138,7 @@ class LayeredGraph:
         return len(self.g.nodes_with_label(f"{node_type}/{name}", self.LAYER[node_type]))
 
     def add_node(self, node_type, name, attrs, timings):
-        attrs["type"] = node_type
-        t0 = perf_ns()
-        k = self.count_instances(node_type, name)
-        timings.add("count instances", perf_ns() - t0)
-        unique = f"{name}_{k + 1}"
+        unique = unique_name(self, node_type, name, attrs, timings)
         i = self._new_id(node_type)
         g = self.g
         g.add_node(i, self.LAYER[node_type])

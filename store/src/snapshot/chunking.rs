@@ -163,16 +163,6 @@ pub fn segment_layer_part(id: u64) -> Option<(LayerId, u32)> {
     ))
 }
 
-/// The layer whose point or tree chunk a segment id names (`None` for a part's or the
-/// manifest's id).
-pub fn chunk_segment_layer(id: u64) -> Option<LayerId> {
-    if is_chunk_segment_id(id) {
-        segment_layer_part(id).map(|(l, _)| l)
-    } else {
-        None
-    }
-}
-
 /// Whether a layer with `points` points is published in chunks of `chunk_len`: when it
 /// has more than one chunk's worth and its chunks fit the segment ids.
 pub(crate) fn is_chunked(points: usize, chunk_len: usize) -> bool {
@@ -251,12 +241,13 @@ mod tests {
                 for place in [0, 5, MAX_CHUNKS_PER_LAYER - 1] {
                     let point = chunk_segment_id(LayerId(layer), part, place).unwrap();
                     let tree = tree_chunk_segment_id(LayerId(layer), part, place).unwrap();
-                    assert_eq!(chunk_segment_layer(point), Some(LayerId(layer)));
+                    assert!(is_chunk_segment_id(point));
+                    assert_eq!(segment_layer_part(point), Some((LayerId(layer), part)));
                     assert_eq!(segment_layer_part(tree), Some((LayerId(layer), part)));
                 }
                 let id = part_segment_id(LayerId(layer), part).unwrap();
                 assert_eq!(segment_layer_part(id), Some((LayerId(layer), part)));
-                assert_eq!(chunk_segment_layer(id), None);
+                assert!(!is_chunk_segment_id(id));
             }
         }
     }

@@ -52,9 +52,9 @@ pub use crate::bytes::{ARCHIVE_ALIGN, SegmentBytes, archive};
 pub use chunking::{
     MANIFEST_SEGMENT_ID, MAX_CHUNKS_PER_LAYER, MAX_LAYER_ID, MAX_PART_ROWS, MAX_PARTS_PER_LAYER,
     MAX_POINT_CHUNK_LEN, PART_ITEM_ROW_BITS, PART_ROWS, POINT_CHUNK_LEN, STRUCTURE_SEGMENT_ID,
-    TREE_CHUNK_MIN_POINTS, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, chunk_segment_layer,
-    is_chunk_segment_id, is_part_segment_id, is_structure_segment_id, is_tree_chunk_segment_id,
-    part_segment_id, segment_layer_part, tree_chunk_segment_id,
+    TREE_CHUNK_MIN_POINTS, WITHHELD_TREE_MAX_MEMBERS, chunk_segment_id, is_chunk_segment_id,
+    is_part_segment_id, is_structure_segment_id, is_tree_chunk_segment_id, part_segment_id,
+    segment_layer_part, tree_chunk_segment_id,
 };
 pub use publish::{
     ArchivedGraph, CutBytes, PointChunkSource, PublishedLayer, PublishedParts, SegmentCache,
