@@ -8,6 +8,8 @@
 //!   spatial queries.
 //! * See [`SceneGraph::sync_to`] for making a graph equal another with the fewest
 //!   mutations (a source that resends its whole graph).
+//! * See [`recording`] for recording a live scene's cuts and querying any of them in
+//!   place.
 //! * See [`snapshot`] for archiving a graph and opening a `.ygg` file, and
 //!   [`snapshot::SegmentCache`] for publishing a changing graph incrementally.
 //!
@@ -19,6 +21,7 @@
 //! | `snapshot/` | the archived layout: `schema.rs` and `chunking.rs` shared, `read/` what readers run (validate, join a cut, rejoin, the archived [`SceneView`], `.ygg` files), `publish/` what only a publishing writer runs (archiving, segment cache, chunk state, layer index patches) |
 //! | `index/` | spatial indexes: `live/` (the live kd-tree, its overlay, a graph's indexes), `archived/` (kiddo's trees in a snapshot or built by a reader), the shared nearest walk |
 //! | `query/` | the queries: `pattern`, `spatial`, `fov`, `traverse` |
+//! | `recording/` | recordings: the file format, [`recording::RecordingWriter`], [`recording::Recording`], what changed between two cuts |
 //! | `id.rs`, `feature.rs`, `points.rs`, `bytes.rs`, `error.rs` | ids and boxes, feature values, point columns, aligned archive bytes, errors |
 
 #[cfg(not(target_endian = "little"))]
@@ -32,6 +35,7 @@ mod id;
 pub mod index;
 mod points;
 pub mod query;
+pub mod recording;
 pub mod snapshot;
 mod view;
 

@@ -73,6 +73,20 @@ fn rows_under(seg: &ArchivedLayerSegment, parent: u64) -> &[u32] {
 }
 
 impl<'a> ArchivedScene<'a> {
+    /// The nodes of part number `part` of layer `layer`, if the cut has that part.
+    pub fn part_nodes(&self, layer: LayerId, part: u32) -> impl Iterator<Item = ArchivedNodeRef> {
+        let parts = self.segment(layer).map_or(0..0, |(_, r)| r);
+        let found = parts
+            .into_iter()
+            .find(|&p| self.parts[p].part.to_native() == part);
+        found.into_iter().flat_map(move |p| {
+            (0..self.parts[p].ids.len() as u32).map(move |row| ArchivedNodeRef {
+                part: p as u32,
+                row,
+            })
+        })
+    }
+
     /// The part holding `node` and the position of the node index rooted at `node` in
     /// it, if there is one (its tree may be withheld).
     fn node_index_position(&self, node: NodeId) -> Option<(&'a ArchivedLayerSegment, usize)> {
