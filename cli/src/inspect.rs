@@ -3,6 +3,9 @@
 //! * `inspect scene.ygg` and `inspect --scene NAME` (a live scene): every layer (id,
 //!   name, nodes, points, edges, nested nodes, generation, segment bytes, indexes), the
 //!   layer DAG, totals, the objects of the query contract, the indexes and the memory.
+//! * `inspect run.yggrec` (a recording): its files, cuts and time span, and a timeline
+//!   of cuts (time, generation, bytes added, layers changed); with `--at`/`--time`, the
+//!   scene at that cut as above.
 //! * `inspect FILE.json[.gz]` or `inspect FILE.sparkdsg` (a Spark-DSG file): the object
 //!   labels with their counts (label id, name, objects), then the paper's static table —
 //!   for each layout (all four, or `--layouts mint,saffron`), layers, nodes, edges and
@@ -26,8 +29,8 @@ use crate::query::{live_snapshot, seconds};
 /// Arguments of `ygg inspect`.
 #[derive(Parser, Debug)]
 pub struct InspectArgs {
-    /// A `.ygg` snapshot, or a Spark-DSG file (`.json`, `.json.gz`, `.sparkdsg`) whose
-    /// layouts to tabulate.
+    /// A `.ygg` snapshot, a recording folder (its timeline), or a Spark-DSG file
+    /// (`.json`, `.json.gz`, `.sparkdsg`) whose layouts to tabulate.
     #[arg(required_unless_present = "scene", conflicts_with = "scene")]
     pub path: Option<PathBuf>,
     /// Inspect a live scene published under this name instead of a file.
@@ -42,6 +45,16 @@ pub struct InspectArgs {
     /// Seconds to wait for a live scene's writer and first snapshot.
     #[arg(long, default_value_t = 5.0)]
     pub timeout: f64,
+    /// For a recording: inspect the cut of this generation instead of the timeline.
+    #[arg(long, conflicts_with = "time")]
+    pub at: Option<u64>,
+    /// For a recording: inspect the scene as it was at this time (see `ygg query --time`).
+    #[arg(long, allow_hyphen_values = true)]
+    pub time: Option<crate::moment::TimeSpec>,
+    /// For a recording's timeline: how many cuts to list (the first and the last halves;
+    /// 0 lists every cut).
+    #[arg(long, default_value_t = 20)]
+    pub cuts: usize,
 }
 
 /// Runs `ygg inspect`.
@@ -49,7 +62,17 @@ pub struct InspectArgs {
 /// # Errors
 /// A message naming the file or scene that could not be read.
 pub fn run(args: &InspectArgs) -> Result<(), String> {
+    let on_recording = args
+        .path
+        .as_deref()
+        .is_some_and(crate::moment::is_recording);
+    if !on_recording && (args.at.is_some() || args.time.is_some()) {
+        return Err(
+            "--at and --time apply to a recording (a folder written by `ygg record`)".into(),
+        );
+    }
     match (&args.path, &args.scene) {
+        (Some(path), _) if on_recording => crate::timeline::run(path, args),
         (Some(path), _) if is_spark_dsg(path)? => layouts_table(path, &args.layouts),
         (Some(path), _) => {
             if !args.layouts.is_empty() {
@@ -82,19 +105,10 @@ pub fn run(args: &InspectArgs) -> Result<(), String> {
             }
             let snapshot = live_snapshot(scene, seconds(args.timeout, "--timeout")?)?;
             let raw = snapshot.raw();
-            let memory = Memory {
-                // The structure segment counts with the manifest.
-                manifest: raw.manifest_bytes().len()
-                    + raw.layer(STRUCTURE_SEGMENT_ID).map_or(0, <[u8]>::len),
-                layers: raw.layers().fold(BTreeMap::new(), |mut bytes, (e, b)| {
-                    // A layer's bytes: its parts and their chunks.
-                    if let Some((layer, _)) = segment_layer_part(e.layer_id) {
-                        *bytes.entry(layer).or_default() += b.len();
-                    }
-                    bytes
-                }),
-                total: None,
-            };
+            let memory = Memory::of_segments(
+                raw.manifest_bytes().len(),
+                raw.layers().map(|(e, b)| (e.layer_id, b.len())),
+            );
             let view = snapshot.view();
             print_scene(
                 &format!("live scene {scene}"),
@@ -129,11 +143,34 @@ fn is_spark_dsg(path: &Path) -> Result<bool, String> {
 }
 
 /// Segment sizes of a scene.
-struct Memory {
+pub(crate) struct Memory {
     manifest: usize,
     layers: BTreeMap<LayerId, usize>,
     /// The file size, for a file (header and padding included).
     total: Option<usize>,
+}
+
+impl Memory {
+    /// The memory of a cut of segments (`(segment id, bytes)`): the structure counts with
+    /// the manifest, a layer's parts and chunks with their layer.
+    pub(crate) fn of_segments(
+        manifest: usize,
+        segments: impl Iterator<Item = (u64, usize)>,
+    ) -> Memory {
+        let mut memory = Memory {
+            manifest,
+            layers: BTreeMap::new(),
+            total: None,
+        };
+        for (id, len) in segments {
+            if id == STRUCTURE_SEGMENT_ID {
+                memory.manifest += len;
+            } else if let Some((layer, _)) = segment_layer_part(id) {
+                *memory.layers.entry(layer).or_default() += len;
+            }
+        }
+        memory
+    }
 }
 
 /// One layer's line.
@@ -221,7 +258,7 @@ fn describe_node(id: NodeId) -> String {
     }
 }
 
-fn print_scene<V: SceneView>(
+pub(crate) fn print_scene<V: SceneView>(
     title: &str,
     view: &V,
     generation: u64,

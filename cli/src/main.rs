@@ -23,13 +23,18 @@
 //! `ygg-test-reader`, `ygg-soak`) live in `ygg-testkit`, benchmarks in `ygg-bench`.
 
 mod bridge;
+mod changes;
 mod demo;
 mod error_chain;
 mod export;
 mod import;
 mod inspect;
+mod moment;
 mod query;
+mod record;
+mod replay;
 mod serve;
+mod timeline;
 mod watch;
 
 use std::process::ExitCode;
@@ -80,6 +85,13 @@ enum Command {
     /// Print every validated snapshot of a live scene as it arrives, and writer exits
     /// and restarts.
     Watch(watch::WatchArgs),
+    /// Record a live scene: each cut it receives is appended to a recording (a folder),
+    /// each changed segment once. Query it with `ygg query DIR --time T`, inspect its
+    /// timeline with `ygg inspect DIR`, replay it with `ygg serve --recording DIR`.
+    Record(record::RecordArgs),
+    /// What changed in a recording between two moments: nodes added, removed, moved and
+    /// relabelled, edges added and removed (one JSON object).
+    Changes(changes::ChangesArgs),
     /// Bridge another system's scene-graph stream into a scene (`ygg bridge zmq`).
     #[command(subcommand)]
     Bridge(bridge::BridgeCommand),
@@ -107,6 +119,12 @@ fn main() -> ExitCode {
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),
         Command::Watch(args) => watch::run(&args),
+        Command::Record(args) => record::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
+        Command::Changes(args) => changes::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
         Command::Bridge(command) => bridge::run(&command).map(|()| ExitCode::SUCCESS),
     };
     match result {

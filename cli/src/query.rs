@@ -25,9 +25,17 @@ use ygg_store::{SceneView, SnapshotFile};
 /// Arguments of `ygg query`.
 #[derive(Parser, Debug)]
 pub struct QueryArgs {
-    /// The `.ygg` snapshot to query (or use --scene).
+    /// The `.ygg` snapshot or recording folder to query (or use --scene).
     #[arg(required_unless_present = "scene", conflicts_with = "scene")]
     pub snapshot: Option<PathBuf>,
+    /// For a recording: query the cut of this generation (the last one at or before it).
+    #[arg(long, conflicts_with = "time")]
+    pub at: Option<u64>,
+    /// For a recording: query the scene as it was at this time (the last cut published at
+    /// or before it): seconds since the Unix epoch, +S after the first cut, -S before the
+    /// last. Default: the last cut.
+    #[arg(long, allow_hyphen_values = true)]
+    pub time: Option<crate::moment::TimeSpec>,
     /// Query a live scene published under this name instead of a file.
     #[arg(long)]
     pub scene: Option<String>,
@@ -66,7 +74,24 @@ pub fn run(args: &QueryArgs) -> Result<(), String> {
         .is_none_or(|p| p == std::path::Path::new("-"));
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
+    let on_recording = args
+        .snapshot
+        .as_deref()
+        .is_some_and(crate::moment::is_recording);
+    if !on_recording && (args.at.is_some() || args.time.is_some()) {
+        return Err(
+            "--at and --time apply to a recording (a folder written by `ygg record`)".into(),
+        );
+    }
     let stats = match (&args.snapshot, &args.scene) {
+        (Some(path), _) if on_recording => {
+            let recording = crate::moment::open_recording(path)?;
+            let cut = crate::moment::chosen_cut(&recording, args.at, args.time)?;
+            let scene = recording.scene(cut).map_err(|e| e.to_string())?;
+            let opened = start.elapsed();
+            let stats = answer_lines(scene.view(), input, &source, &mut out, interactive)?;
+            Stats { opened, ..stats }
+        }
         (Some(path), _) => {
             let file = SnapshotFile::open(path).map_err(|e| e.to_string())?;
             let opened = start.elapsed();

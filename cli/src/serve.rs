@@ -21,8 +21,21 @@ pub struct ServeArgs {
     #[arg(long)]
     scene: String,
     /// A `.ygg` snapshot to serve; default: the built-in office.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "recording")]
     file: Option<std::path::PathBuf>,
+    /// Replay a recording (a folder written by `ygg record`) instead: its cuts are
+    /// published with their recorded timing, as a live writer would.
+    #[arg(long)]
+    recording: Option<std::path::PathBuf>,
+    /// With --recording: playback speed (2 plays twice as fast).
+    #[arg(long, default_value_t = 1.0, requires = "recording")]
+    speed: f64,
+    /// With --recording: where to start (see `ygg query --time`: +S after the first cut).
+    #[arg(long, requires = "recording", allow_hyphen_values = true)]
+    from: Option<crate::moment::TimeSpec>,
+    /// With --recording: start again after the last cut, until signalled.
+    #[arg(long = "loop", requires = "recording")]
+    looped: bool,
     /// Scale of the built-in office.
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
@@ -102,6 +115,17 @@ pub fn run(args: &ServeArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     if args.seconds.is_some_and(|s| !(s.is_finite() && s > 0.0)) {
         return Err("--seconds must be a positive number".into());
+    }
+    if let Some(recording) = &args.recording {
+        return crate::replay::run(&crate::replay::ReplayArgs {
+            scene: &args.scene,
+            recording,
+            speed: args.speed,
+            from: args.from,
+            looped: args.looped,
+            max_readers: args.max_readers,
+            seconds: args.seconds,
+        });
     }
     let t = Instant::now();
     let graph = match &args.file {

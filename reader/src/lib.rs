@@ -4,6 +4,8 @@
 //! * See [`SceneReader`] (from [`SceneReader::builder`]):
 //!   [`SceneReader::wait_next`] / [`SceneReader::latest`] hand out [`SceneSnapshot`]s whose
 //!   [`SceneSnapshot::view`] every query of [`ygg_store::query`] runs on.
+//! * [`SceneRecorder`] records the cuts a reader receives into a
+//!   [`ygg_store::recording::RecordingWriter`].
 //! * The transport underneath is [`ygg_transport`]; each received segment is validated once
 //!   against the archived layout of [`ygg_store::snapshot`] before any query touches it.
 //!
@@ -31,8 +33,11 @@
 #![warn(missing_docs)]
 
 mod join_memo;
+mod recorder;
 mod scene;
 
+#[doc(inline)]
+pub use recorder::{RecordError, SceneRecorder};
 #[doc(inline)]
 pub use scene::{SceneReader, SceneReaderBuilder, SceneReceiveError, SceneSnapshot};
 #[doc(inline)]
