@@ -83,6 +83,16 @@ typedef struct ygg_graph ygg_graph;
 // between threads); the snapshots it gives are independent handles.
 typedef struct ygg_reader ygg_reader;
 
+// A recorder of a live scene.
+//
+// Thread-safety: not thread-safe; use it from one thread at a time.
+typedef struct ygg_recorder ygg_recorder;
+
+// An opened recording.
+//
+// Thread-safety: immutable; any number of threads may use it at once.
+typedef struct ygg_recording ygg_recording;
+
 // A validated snapshot of a scene, with its view and object catalog built once.
 //
 // Thread-safety: immutable; any number of threads may query it at once. Destroy it only
@@ -124,6 +134,18 @@ typedef struct ygg_reader_options {
   // default: a library should not take over an application's signals.
   bool handle_termination_signals;
 } ygg_reader_options;
+
+// One recorded cut (`ygg_recording_cut`).
+typedef struct ygg_cut_info {
+  // The cut's generation.
+  uint64_t generation;
+  // When the writer published it, ns since the Unix epoch (writer's clock).
+  uint64_t writer_unix_ns;
+  // When the recorder wrote it, ns since the Unix epoch.
+  uint64_t recorder_unix_ns;
+  // Bytes the cut added to the recording.
+  uint64_t bytes_added;
+} ygg_cut_info;
 
 // A feature value read from a snapshot; only the field its `kind` names is set.
 //
@@ -642,6 +664,89 @@ enum ygg_status ygg_reader_writer_status(struct ygg_reader *reader, enum ygg_wri
 // # Safety
 // `requested` is null or writable.
 enum ygg_status ygg_reader_termination_requested(struct ygg_reader *reader, bool *requested);
+
+// Opens the recording in folder `path` (written by `ygg record` or `ygg_recorder`).
+//
+// Ownership: `*out` receives a new handle the caller destroys with
+// `ygg_recording_destroy`.
+//
+// # Safety
+// `path` is null or NUL-terminated; `out` is null or writable.
+enum ygg_status ygg_recording_open(const char *path, struct ygg_recording **out);
+
+// Destroys a recording. Snapshots it gave stay valid until destroyed themselves.
+//
+// # Safety
+// `recording` is not used by another thread during the call.
+enum ygg_status ygg_recording_destroy(struct ygg_recording *recording);
+
+// The number of cuts in `*count`.
+//
+// # Safety
+// `count` is null or writable.
+enum ygg_status ygg_recording_cut_count(const struct ygg_recording *recording, size_t *count);
+
+// Cut `index` (0 = the first) in `*info`; `YGG_STATUS_NOT_FOUND` past the last.
+//
+// # Safety
+// `info` is null or writable.
+enum ygg_status ygg_recording_cut(const struct ygg_recording *recording,
+                                  size_t index,
+                                  struct ygg_cut_info *info);
+
+// The scene as it was at `unix_ns` (ns since the Unix epoch, writer's clock): the last
+// cut published at or before it, as a snapshot handle in `*snapshot`.
+// `YGG_STATUS_NOT_FOUND` before the first cut.
+//
+// Ownership: `*snapshot` receives a new handle the caller destroys with
+// `ygg_snapshot_destroy`; it keeps the recording's files mapped until then.
+//
+// # Safety
+// `snapshot` is null or writable.
+enum ygg_status ygg_recording_at_time(const struct ygg_recording *recording,
+                                      uint64_t unix_ns,
+                                      struct ygg_snapshot **snapshot);
+
+// The cut of generation `generation` (the last one of that generation or earlier), as
+// a snapshot handle in `*snapshot`; `YGG_STATUS_NOT_FOUND` when every cut is newer.
+//
+// Ownership: as `ygg_recording_at_time`.
+//
+// # Safety
+// `snapshot` is null or writable.
+enum ygg_status ygg_recording_at_generation(const struct ygg_recording *recording,
+                                            uint64_t generation,
+                                            struct ygg_snapshot **snapshot);
+
+// Attaches to live scene `scene` (waiting up to `wait_for_writer_ms` for its writer) and
+// records into folder `path` (created if missing; an existing recording is continued
+// in a new file).
+//
+// Ownership: `*out` receives a new handle the caller destroys with
+// `ygg_recorder_destroy` (which syncs the recording).
+//
+// # Safety
+// `scene` and `path` are null or NUL-terminated; `out` is null or writable.
+enum ygg_status ygg_recorder_open(const char *scene,
+                                  const char *path,
+                                  uint64_t wait_for_writer_ms,
+                                  struct ygg_recorder **out);
+
+// Waits up to `timeout_ns` for a new cut and records it; `*recorded` tells whether one
+// was. `YGG_STATUS_RECEIVE` from the reader, `YGG_STATUS_IO` when the append failed
+// (the recording stays readable up to its last cut).
+//
+// # Safety
+// `recorded` is null or writable; `recorder` is not used by another thread.
+enum ygg_status ygg_recorder_record_next(struct ygg_recorder *recorder,
+                                         uint64_t timeout_ns,
+                                         bool *recorded);
+
+// Destroys a recorder; the recording is synced to disk first.
+//
+// # Safety
+// `recorder` is not used by another thread during the call.
+enum ygg_status ygg_recorder_destroy(struct ygg_recorder *recorder);
 
 // Opens a `.ygg` snapshot file: maps it and validates it once.
 //

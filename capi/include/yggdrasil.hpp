@@ -562,6 +562,81 @@ private:
   ygg_reader* handle_ = nullptr;
 };
 
+/// A recording of a live scene (a folder written by `ygg record` or `Recorder`); any
+/// recorded moment is a `Snapshot` queried in place on the mapped files.
+class Recording {
+public:
+  /// Opens the recording in folder `path`; throws `Error` if it is not one.
+  explicit Recording(const std::string& path) { check(ygg_recording_open(path.c_str(), &handle_)); }
+  ~Recording() {
+    if (handle_ != nullptr) {
+      ygg_recording_destroy(handle_);
+    }
+  }
+  Recording(Recording&& o) noexcept : handle_(std::exchange(o.handle_, nullptr)) {}
+  Recording(const Recording&) = delete;
+  Recording& operator=(const Recording&) = delete;
+  Recording& operator=(Recording&&) = delete;
+
+  /// Number of cuts.
+  std::size_t cut_count() const {
+    std::size_t n = 0;
+    check(ygg_recording_cut_count(handle_, &n));
+    return n;
+  }
+  /// Cut `index` (generation, publish and record times, bytes added).
+  ygg_cut_info cut(std::size_t index) const {
+    ygg_cut_info info{};
+    check(ygg_recording_cut(handle_, index, &info));
+    return info;
+  }
+  /// The scene as it was at `unix_ns` (the last cut published at or before it).
+  Snapshot at_time(std::uint64_t unix_ns) const {
+    ygg_snapshot* s = nullptr;
+    check(ygg_recording_at_time(handle_, unix_ns, &s));
+    return Snapshot(s);
+  }
+  /// The cut of `generation` (or the last earlier one).
+  Snapshot at_generation(std::uint64_t generation) const {
+    ygg_snapshot* s = nullptr;
+    check(ygg_recording_at_generation(handle_, generation, &s));
+    return Snapshot(s);
+  }
+
+private:
+  ygg_recording* handle_ = nullptr;
+};
+
+/// Records a live scene into a recording folder, one cut per `record_next`.
+class Recorder {
+public:
+  /// Attaches to `scene` (waiting up to `wait_for_writer`) and records into `path`.
+  Recorder(const std::string& scene, const std::string& path,
+           std::chrono::milliseconds wait_for_writer = std::chrono::milliseconds(0)) {
+    check(ygg_recorder_open(scene.c_str(), path.c_str(), static_cast<std::uint64_t>(wait_for_writer.count()),
+                            &handle_));
+  }
+  ~Recorder() {
+    if (handle_ != nullptr) {
+      ygg_recorder_destroy(handle_);
+    }
+  }
+  Recorder(Recorder&& o) noexcept : handle_(std::exchange(o.handle_, nullptr)) {}
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+  Recorder& operator=(Recorder&&) = delete;
+
+  /// Records the next cut within `timeout`; whether one was recorded.
+  bool record_next(std::chrono::nanoseconds timeout) {
+    bool recorded = false;
+    check(ygg_recorder_record_next(handle_, static_cast<std::uint64_t>(timeout.count()), &recorded));
+    return recorded;
+  }
+
+private:
+  ygg_recorder* handle_ = nullptr;
+};
+
 }  // namespace ygg
 
 #endif  // YGGDRASIL_HPP

@@ -28,6 +28,8 @@ pub(crate) enum Kind {
     Writer,
     Reader,
     Snapshot,
+    Recording,
+    Recorder,
 }
 
 /// A type handed to C as an opaque handle.

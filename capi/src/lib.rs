@@ -36,6 +36,7 @@ pub mod lists;
 pub mod logging;
 pub mod query;
 pub mod reader;
+pub mod recording;
 pub mod snapshot;
 pub mod whereabouts;
 pub mod writer;

@@ -1,5 +1,5 @@
 //! The snapshot handle (`ygg_snapshot`): a validated, immutable cut of a scene (from a
-//! reader, a `.ygg` file or a graph), and its node accessors.
+//! reader, a `.ygg` file, a graph or a recording), and its node accessors.
 //!
 //! Pointers the accessors return (points, strings) point into the snapshot's
 //! mapped bytes: zero-copy, valid while the snapshot handle lives, never to be freed or
@@ -19,6 +19,7 @@ use std::ffi::c_char;
 use std::sync::Mutex;
 use ygg_dsg::objects::Objects;
 use ygg_reader::SceneSnapshot;
+use ygg_store::recording::RecordedScene;
 use ygg_store::{ArchivedScene, FeatureRef, LayerId, NodeId, Point, SceneView, SnapshotFile};
 
 /// A validated snapshot of a scene, with its view and object catalog built once.
@@ -39,6 +40,8 @@ enum SnapshotSource {
     Live(SceneSnapshot),
     /// A mapped `.ygg` file, or a graph archived in memory.
     File(SnapshotFile),
+    /// A cut of a recording, on its mapped files.
+    Recorded(RecordedScene),
 }
 
 self_cell!(
@@ -81,10 +84,16 @@ impl YggSnapshot {
         YggSnapshot::new(SnapshotSource::Live(snapshot))
     }
 
+    /// A cut of a recording.
+    pub(crate) fn recorded(scene: RecordedScene) -> Self {
+        YggSnapshot::new(SnapshotSource::Recorded(scene))
+    }
+
     fn new(source: SnapshotSource) -> Self {
         let view = SnapshotView::new(source, |source| match source {
             SnapshotSource::Live(s) => s.view().clone(),
             SnapshotSource::File(f) => f.view(),
+            SnapshotSource::Recorded(r) => r.view().clone(),
         });
         YggSnapshot {
             catalog: SnapshotCatalog::new(view, |view| Objects::new(view.borrow_dependent())),

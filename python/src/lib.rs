@@ -9,7 +9,8 @@
 //! * `objects::ObjectQueries`: the object contract of `ygg query`
 //!   (`ygg_dsg::objects`), singly and in batches.
 //! * `graph::PySceneGraph` and `writer::Writer`: building and publishing a graph.
-//! * `reader::Reader`: following a live scene.
+//! * `reader::Reader`: following a live scene; `recording`: recordings of one
+//!   (`open_recording`, `Recording.at`, `Recorder`).
 //! * `errors`: the exception hierarchy; `log_level`: the transport's log level (quiet
 //!   unless `YGG_LOG` or `set_log_level` asks for more).
 //!
@@ -27,6 +28,7 @@ mod node;
 mod objects;
 mod points;
 mod reader;
+mod recording;
 mod scene;
 mod snapshot;
 mod whereabouts;
@@ -41,6 +43,7 @@ fn _yggdrasil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ygg_transport::init_binding_logging();
     m.add_function(wrap_pyfunction!(log_level::set_log_level, m)?)?;
     m.add_function(wrap_pyfunction!(files::open, m)?)?;
+    m.add_function(wrap_pyfunction!(recording::open_recording, m)?)?;
     m.add_function(wrap_pyfunction!(files::write_office, m)?)?;
     m.add_function(wrap_pyfunction!(files::office_graph, m)?)?;
     m.add_function(wrap_pyfunction!(files::spark_dsg_json_parts, m)?)?;
@@ -51,6 +54,8 @@ fn _yggdrasil(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<objects::ObjectQueries>()?;
     m.add_class::<graph_home::PySceneGraph>()?;
     m.add_class::<reader::Reader>()?;
+    m.add_class::<recording::Recording>()?;
+    m.add_class::<recording::Recorder>()?;
     m.add_class::<writer::Writer>()?;
     m.add_class::<whereabouts::AgentPose>()?;
     m.add_class::<whereabouts::RoomScope>()?;

@@ -1,5 +1,5 @@
 //! What a Python `Scene` holds: a validated snapshot (a mapped `.ygg` file, an in-memory
-//! archive, or a live scene's shared-memory samples), its [`ArchivedScene`] view, and the
+//! archive, a live scene's shared-memory samples, or a cut of a recording), its [`ArchivedScene`] view, and the
 //! object catalog of the query contract, built once per snapshot.
 //!
 //! The view borrows the snapshot and the catalog borrows the view; `self_cell` ties each
@@ -13,6 +13,7 @@ use std::sync::Arc;
 use self_cell::self_cell;
 use ygg_dsg::objects::Objects;
 use ygg_reader::SceneSnapshot;
+use ygg_store::recording::RecordedScene;
 use ygg_store::{ArchivedScene, NodeId, SnapshotFile};
 
 /// Where a snapshot's bytes live.
@@ -21,6 +22,8 @@ pub enum SnapshotSource {
     File(SnapshotFile),
     /// A live scene's samples, held in shared memory until the last clone is dropped.
     Live(SceneSnapshot),
+    /// A cut of a recording, queried in place on its mapped files.
+    Recorded(RecordedScene),
 }
 
 impl SnapshotSource {
@@ -29,6 +32,7 @@ impl SnapshotSource {
         match self {
             SnapshotSource::File(f) => f.view(),
             SnapshotSource::Live(s) => s.view().clone(),
+            SnapshotSource::Recorded(s) => s.view().clone(),
         }
     }
 
@@ -37,6 +41,7 @@ impl SnapshotSource {
         match self {
             SnapshotSource::File(_) => 0,
             SnapshotSource::Live(s) => s.generation(),
+            SnapshotSource::Recorded(s) => s.summary().generation,
         }
     }
 }

@@ -18,6 +18,9 @@ Angles are degrees wherever you pass one; ``objects.nearest`` answers an id or `
 ``set_log_level("warn")``) asks for more.
 
 spark_dsg 1.1.3's API (reads and writes, over a SceneGraph): ``yggdrasil.dsg``.
+
+Recordings of a live scene (``ygg record`` or ``Recorder``): ``open_recording(path)``;
+``recording.at(time=t)`` is the scene as it was then (a ``Scene``, queried in place).
 """
 from ._yggdrasil import (
     NO_NODE,
@@ -30,6 +33,8 @@ from ._yggdrasil import (
     ObjectQueries,
     QueryError,
     Reader,
+    Recorder,
+    Recording,
     RoomScope,
     Scene,
     SceneGraph,
@@ -38,6 +43,7 @@ from ._yggdrasil import (
     WriterGoneError,
     office_graph,
     open,
+    open_recording,
     set_log_level,
     write_office,
 )
@@ -53,6 +59,8 @@ __all__ = [
     "ObjectQueries",
     "QueryError",
     "Reader",
+    "Recorder",
+    "Recording",
     "RoomScope",
     "Scene",
     "SceneGraph",
@@ -61,6 +69,7 @@ __all__ = [
     "WriterGoneError",
     "office_graph",
     "open",
+    "open_recording",
     "set_log_level",
     "write_office",
 ]

@@ -75,6 +75,9 @@ class WriterGoneError(TransportError):
 def open(path: _Path) -> Scene:
     """Maps a ``.ygg`` snapshot file and validates it once; raises ``FileError``."""
 
+def open_recording(path: _Path) -> Recording:
+    """Opens a recording folder (``ygg record`` / ``Recorder``); raises ``FileError``."""
+
 def write_office(path: _Path, seed: int = 7, scale: float = 1.0) -> None:
     """Writes the built-in office as a Spark-DSG file (binary for ``.sparkdsg``, else JSON)."""
 
@@ -392,3 +395,40 @@ class Writer:
         """Stops publishing and removes the shared memory."""
     def __enter__(self) -> Writer: ...
     def __exit__(self, *args: object) -> None: ...
+
+class Recording:
+    """A recording of a live scene; times are seconds since the Unix epoch (writer's clock)."""
+
+    @property
+    def cuts(self) -> Dict[str, np.ndarray]:
+        """Per cut: ``generation`` (uint64), ``time``, ``recorded_time`` (float64), ``bytes_added`` (uint64)."""
+    @property
+    def start_time(self) -> float: ...
+    @property
+    def end_time(self) -> float: ...
+    @property
+    def defects(self) -> List[str]: ...
+    def __len__(self) -> int: ...
+    def at(self, time: Optional[float] = None, generation: Optional[int] = None) -> Scene:
+        """The scene as it was at ``time`` (the last cut at or before it) or at cut ``generation``."""
+    def changes(self, t0: float, t1: float, tolerance: float = 0.05) -> Dict[str, Any]:
+        """Nodes added, removed, moved (beyond ``tolerance`` m), relabelled; edges added and removed."""
+
+class Recorder:
+    """Records a live scene into a recording folder; waits release the GIL."""
+
+    def __init__(
+        self,
+        scene_name: str,
+        path: _Path,
+        wait_for_writer: float = 5.0,
+        max_size: Optional[int] = None,
+        max_age: Optional[float] = None,
+    ) -> None: ...
+    def record_next(self, timeout: float = 1.0) -> bool:
+        """Records the next cut within ``timeout`` seconds; True if one was recorded."""
+    @property
+    def cuts_recorded(self) -> int: ...
+    @property
+    def bytes_recorded(self) -> int: ...
+    def sync(self) -> None: ...

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <unistd.h>
@@ -696,6 +697,59 @@ void whereabouts_and_log_level(const std::string& fixtures) {
   EXPECT(error_has("loud"));
   EXPECT_STATUS(ygg_set_log_level(nullptr), YGG_STATUS_NULL_ARGUMENT);
 }
+// Recording a live scene and going back to any recorded moment (ygg_recorder,
+// ygg_recording) through the C++ wrapper, and the C calls' argument checks.
+void recording_and_time_travel(const std::string& scene, const std::string& dir) {
+  ygg::SceneGraph g;
+  const auto objects = g.add_layer("OBJECTS");
+  g.add_node(7, objects);
+  g.set_point(7, {0.0f, 0.0f, 0.0f});
+  ygg::Writer writer(scene + "-rec", std::move(g));
+  writer.publish();
+  const std::string path = dir + "/run.yggrec";
+  std::vector<std::pair<std::uint64_t, float>> expected;  // (generation, x of node 7)
+  {
+    ygg::Recorder recorder(scene + "-rec", path, std::chrono::seconds(5));
+    EXPECT(recorder.record_next(std::chrono::seconds(5)));
+    expected.emplace_back(1, 0.0f);
+    for (int tick = 1; tick <= 4; ++tick) {
+      writer.graph().set_point(7, {float(tick), 0.0f, 0.0f});
+      const auto generation = writer.publish().generation;
+      EXPECT(recorder.record_next(std::chrono::seconds(5)));
+      expected.emplace_back(generation, float(tick));
+    }
+  }
+  const ygg::Recording recording(path);
+  EXPECT(recording.cut_count() == expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const ygg_cut_info cut = recording.cut(i);
+    EXPECT(cut.generation == expected[i].first);
+    EXPECT(recording.at_generation(cut.generation).points(7)[0][0] == expected[i].second);
+    EXPECT(recording.at_time(cut.writer_unix_ns).points(7)[0][0] == expected[i].second);
+  }
+  try {
+    recording.at_time(0);
+    EXPECT(false);
+  } catch (const ygg::Error& e) {
+    EXPECT(e.status() == YGG_STATUS_NOT_FOUND);
+  }
+  try {
+    recording.cut(expected.size());
+    EXPECT(false);
+  } catch (const ygg::Error& e) {
+    EXPECT(e.status() == YGG_STATUS_NOT_FOUND);
+  }
+  try {
+    ygg::Recording missing(dir + "/no-such-recording");
+    EXPECT(false);
+  } catch (const ygg::Error& e) {
+    EXPECT(e.status() == YGG_STATUS_IO && std::strstr(e.what(), "no-such-recording") != nullptr);
+  }
+  EXPECT_STATUS(ygg_recording_open(nullptr, nullptr), YGG_STATUS_NULL_ARGUMENT);
+  std::size_t count = 0;
+  EXPECT_STATUS(ygg_recording_cut_count(nullptr, &count), YGG_STATUS_NULL_ARGUMENT);
+  std::filesystem::remove_all(path);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -724,6 +778,7 @@ int main(int argc, char** argv) {
   writer_and_reader(scene);
   parts_of_a_growing_layer(scene);
   cpp_wrapper(scene);
+  recording_and_time_travel(scene, dir);
   whereabouts_and_log_level(fixtures);
   const std::string cleanup = std::string(dir) + "/scene.ygg";
   std::remove(cleanup.c_str());

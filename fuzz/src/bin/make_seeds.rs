@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use ygg_dsg::office::{OfficeParams, generate};
+use ygg_store::recording::{CutToRecord, RecordedSegment, Recording, RecordingOptions, RecordingWriter};
 use ygg_store::{FeatureValue, NodeId, SceneGraph};
 use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, part_segment_id};
 use ygg_transport::ManifestEntry;
@@ -66,8 +67,57 @@ fn write(target: &str, name: &str, bytes: &[u8]) -> std::io::Result<()> {
     std::fs::write(dir.join(format!("seed-{name}")), bytes)
 }
 
+/// Appends `g` as cut `generation` of `recording`: every layer in one part, every
+/// segment of that generation.
+fn record_cut(
+    recording: &mut RecordingWriter,
+    g: &SceneGraph,
+    generation: u64,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let archived = g.to_segments();
+    let mut segments: Vec<RecordedSegment<'_>> = g
+        .layers()
+        .zip(&archived.layers)
+        .map(|(layer, bytes)| RecordedSegment {
+            id: part_segment_id(layer, 0).expect("a small layer id"),
+            generation,
+            bytes,
+        })
+        .collect();
+    segments.push(RecordedSegment {
+        id: STRUCTURE_SEGMENT_ID,
+        generation,
+        bytes: &archived.structure,
+    });
+    segments.sort_by_key(|s| s.id);
+    recording.append_cut(&CutToRecord {
+        generation,
+        session: 1,
+        writer_unix_ns: generation * 1_000_000,
+        manifest: &archived.manifest,
+        segments,
+    })?;
+    Ok(())
+}
+
+/// A recording of two cuts of `g` (the second after a move), as one file's bytes.
+fn recording_seed(g: &SceneGraph) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+    let dir = tempfile::tempdir()?;
+    let mut recording = RecordingWriter::create(dir.path(), RecordingOptions::default())?;
+    record_cut(&mut recording, g, 1)?;
+    let mut moved = g.clone();
+    moved.set_geometry(NodeId(100), vec![[5.0, 5.0, 0.5]])?;
+    record_cut(&mut recording, &moved, 2)?;
+    drop(recording);
+    let opened = Recording::open(dir.path())?;
+    assert_eq!(opened.cuts().len(), 2);
+    opened.scene(1)?;
+    Ok(std::fs::read(dir.path().join("00000001.ygr"))?)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let g = small_graph()?;
+    write("open_recording", "two-cuts", &recording_seed(&g)?)?;
     let file = Path::new("fuzz/corpus/open_ygg/seed-small.ygg");
     std::fs::create_dir_all(file.parent().expect("a folder"))?;
     g.save(file)?;
