@@ -6,6 +6,7 @@ mod hydra;
 mod ipc;
 mod ladder;
 mod mission;
+mod record;
 mod remote;
 
 use clap::{Parser, Subcommand};
@@ -30,6 +31,10 @@ enum Command {
     /// publish, bytes, latency, reader CPU, attach and memory per window of ticks,
     /// optionally against another build (bench/results/mission.md).
     Mission(mission::MissionArgs),
+    /// Recording a live scene: a recorder's cost to the writer (paired), the recording's
+    /// size, opening any cut, Q1a on a past cut, `changes`, replay timing
+    /// (bench/results/record.md).
+    Record(record::RecordArgs),
     /// Importing the full office (JSON and binary) against spark_dsg's own load.
     DsgIo(dsg_io::DsgIoArgs),
     /// Hydra's ZMQ stream through `ygg bridge zmq` and Yggdrasil readers, against
@@ -52,6 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Ladder(args) => ladder::run(&args),
         Command::Ipc(args) => ipc::run(&args),
         Command::Mission(args) => mission::run(&args),
+        Command::Record(args) => record::run(&args),
         Command::DsgIo(args) => dsg_io::run(&args),
         Command::Capi(args) => capi::run(&args),
         Command::Hydra(args) => hydra::run(&args),

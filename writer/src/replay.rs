@@ -118,6 +118,11 @@ impl RecordingPlayer {
     pub fn publish_cut(&mut self, cut: usize) -> Result<(), ReplayError> {
         // A cut that fails validation is never sent.
         drop(self.recording.scene(cut)?);
+        self.send_cut(cut)
+    }
+
+    /// Sends cut `cut`, which [`Recording::scene`] validated before.
+    fn send_cut(&mut self, cut: usize) -> Result<(), ReplayError> {
         let raw = self.recording.raw_cut(cut)?;
         let session = raw.summary.session;
         self.publisher.start_cut();
@@ -192,12 +197,12 @@ impl RecordingPlayer {
             for (i, cut) in cuts.iter().enumerate().skip(first) {
                 let offset = cut.writer_unix_ns.saturating_sub(origin) as f64 / speed;
                 let due = start + Duration::from_nanos(offset as u64);
-                let now = Instant::now();
-                if due > now {
-                    self.publisher.wait(due - now)?;
-                }
+                // Validated (once per segment) and joined before its time, so that only
+                // the copy into shared memory is left when it is due.
+                drop(self.recording.scene(i)?);
+                wait_until(&self.publisher, due)?;
                 let late = Instant::now().saturating_duration_since(due);
-                self.publish_cut(i)?;
+                self.send_cut(i)?;
                 self.lateness.push(late);
                 published += 1;
                 if !on_cut(i) {
@@ -210,3 +215,21 @@ impl RecordingPlayer {
         }
     }
 }
+
+/// How long before a cut's time the player stops sleeping and spins: a sleep may
+/// overshoot by tens of microseconds (more on a busy machine), a spin does not.
+const SPIN_BEFORE_DUE: Duration = Duration::from_micros(1500);
+
+/// Waits until `due`: sleeps on the publisher's node (so SIGINT/SIGTERM end the wait)
+/// until shortly before it, then spins.
+fn wait_until(publisher: &SegmentPublisher, due: Instant) -> Result<(), WriterWaitError> {
+    let now = Instant::now();
+    if due > now + SPIN_BEFORE_DUE {
+        publisher.wait(due - now - SPIN_BEFORE_DUE)?;
+    }
+    while Instant::now() < due {
+        std::hint::spin_loop();
+    }
+    Ok(())
+}
+
