@@ -98,7 +98,12 @@ pub unsafe extern "C" fn ygg_recording_cut_count(
     guard("ygg_recording_cut_count", || {
         // SAFETY: the caller's contract for `count`.
         let out = unsafe { Out::new(count, "count") }?;
-        out.write(handle::resolve(recording, "recording")?.recording.cuts().len());
+        out.write(
+            handle::resolve(recording, "recording")?
+                .recording
+                .cuts()
+                .len(),
+        );
         Ok(())
     })
 }

@@ -57,22 +57,18 @@ pub struct InspectArgs {
     pub cuts: usize,
 }
 
-/// Runs `ygg inspect`.
+/// Runs `ygg inspect` on a file or a live scene (a recording's folder goes to
+/// [`crate::timeline::run`]).
 ///
 /// # Errors
 /// A message naming the file or scene that could not be read.
 pub fn run(args: &InspectArgs) -> Result<(), String> {
-    let on_recording = args
-        .path
-        .as_deref()
-        .is_some_and(crate::moment::is_recording);
-    if !on_recording && (args.at.is_some() || args.time.is_some()) {
+    if args.at.is_some() || args.time.is_some() {
         return Err(
             "--at and --time apply to a recording (a folder written by `ygg record`)".into(),
         );
     }
     match (&args.path, &args.scene) {
-        (Some(path), _) if on_recording => crate::timeline::run(path, args),
         (Some(path), _) if is_spark_dsg(path)? => layouts_table(path, &args.layouts),
         (Some(path), _) => {
             if !args.layouts.is_empty() {

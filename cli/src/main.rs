@@ -112,9 +112,12 @@ fn main() -> ExitCode {
         Command::Export(args) => export::run(&args)
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),
-        Command::Inspect(args) => inspect::run(&args)
-            .map(|()| ExitCode::SUCCESS)
-            .map_err(Into::into),
+        Command::Inspect(args) => match args.path.as_deref() {
+            Some(path) if moment::is_recording(path) => timeline::run(path, &args),
+            _ => inspect::run(&args),
+        }
+        .map(|()| ExitCode::SUCCESS)
+        .map_err(Into::into),
         Command::Query(args) => query::run(&args)
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),

@@ -40,7 +40,9 @@ pub struct Recording {
 /// cut (negative or non-finite refused).
 fn unix_ns(seconds: f64, what: &str) -> PyResult<u64> {
     if seconds.is_finite() && seconds >= 0.0 {
-        Ok(((seconds * 1e6).round() as u64).saturating_mul(1000).saturating_add(999))
+        Ok(((seconds * 1e6).round() as u64)
+            .saturating_mul(1000)
+            .saturating_add(999))
     } else {
         Err(QueryError::new_err(format!(
             "{what} must be a non-negative number of seconds since the Unix epoch, got {seconds}"
@@ -78,7 +80,10 @@ impl Recording {
         };
         d.set_item("generation", col_u64(|c| c.generation).into_pyarray(py))?;
         d.set_item("time", col_s(|c| c.writer_unix_ns).into_pyarray(py))?;
-        d.set_item("recorded_time", col_s(|c| c.recorder_unix_ns).into_pyarray(py))?;
+        d.set_item(
+            "recorded_time",
+            col_s(|c| c.recorder_unix_ns).into_pyarray(py),
+        )?;
         d.set_item("bytes_added", col_u64(|c| c.bytes_added).into_pyarray(py))?;
         Ok(d)
     }
@@ -171,8 +176,14 @@ impl Recording {
         d.set_item("nodes_removed", ids(&c.nodes_removed).into_pyarray(py))?;
         let moved: Vec<u64> = c.nodes_moved.iter().map(|m| m.id.0).collect();
         d.set_item("nodes_moved", moved.into_pyarray(py))?;
-        d.set_item("moved_from", points(py, c.nodes_moved.iter().map(|m| m.from).collect())?)?;
-        d.set_item("moved_to", points(py, c.nodes_moved.iter().map(|m| m.to).collect())?)?;
+        d.set_item(
+            "moved_from",
+            points(py, c.nodes_moved.iter().map(|m| m.from).collect())?,
+        )?;
+        d.set_item(
+            "moved_to",
+            points(py, c.nodes_moved.iter().map(|m| m.to).collect())?,
+        )?;
         let relabelled: Vec<(u64, Vec<String>, Vec<String>)> = c
             .nodes_relabelled
             .into_iter()
@@ -235,7 +246,11 @@ impl Recorder {
             ..RecordingOptions::default()
         };
         let reader = py
-            .detach(|| SceneReader::builder(scene_name).wait_for_writer(wait).open())
+            .detach(|| {
+                SceneReader::builder(scene_name)
+                    .wait_for_writer(wait)
+                    .open()
+            })
             .map_err(|e| transport_error(&e))?;
         let writer = RecordingWriter::create(&path, options).map_err(|e| file_error(&e))?;
         Ok(Recorder {

@@ -285,3 +285,28 @@ fn a_folder_that_is_not_a_recording_is_refused_with_its_name() {
     let err = Recording::open(&missing).unwrap_err().to_string();
     assert!(err.contains("absent"), "{err}");
 }
+
+#[test]
+fn an_age_bound_drops_files_whose_newest_cut_is_older() {
+    let dir = tempfile::tempdir().unwrap();
+    let options = RecordingOptions {
+        file_bytes: 4096,
+        max_bytes: None,
+        max_age: Some(std::time::Duration::from_nanos(1)),
+    };
+    let mut w = RecordingWriter::create(dir.path(), options).unwrap();
+    let mut g = seeded_graph(8);
+    let mut p = published::Publisher::new();
+    let layer = g.layers().next().unwrap();
+    for i in 0..20 {
+        g.add_node(NodeId(90_000 + i), layer).unwrap();
+        record(&mut p, &mut g, &mut w, i + 1);
+    }
+    drop(w);
+    // Every closed file is older than a nanosecond: only the one being written is left.
+    let rec = Recording::open(dir.path()).unwrap();
+    assert_eq!(rec.files().count(), 1);
+    let last = rec.cuts().len() - 1;
+    assert_eq!(rec.cuts()[last].generation, 20);
+    assert_eq!(rec.scene(last).unwrap().view().node_count(), 8 + 20);
+}

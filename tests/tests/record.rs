@@ -233,6 +233,46 @@ fn recorded_cuts_are_the_published_graphs_and_replay_republishes_them() {
     );
     drop(reader);
 
+    // Looped at 50x: generations keep growing past the recording's, and every cut a reader
+    // receives is one of the recorded graphs.
+    let looped = TestScene::new("rec-loop");
+    let mut player = Proc::spawn(
+        looped.command(
+            "ygg",
+            &[
+                "serve",
+                "--scene",
+                &looped.name,
+                "--recording",
+                rec_dir.to_str().unwrap(),
+                "--speed",
+                "50",
+                "--loop",
+            ],
+        ),
+        "looped replay",
+        &watchdog,
+    );
+    let mut reader = SceneReader::builder(&looped.name)
+        .iceoryx_prefix(&looped.prefix)
+        .wait_for_writer(Duration::from_secs(20))
+        .open()
+        .expect("reader");
+    let recorded: Vec<&Fingerprints> = expected.values().collect();
+    let mut previous = 0;
+    while previous <= last_generation + 2 {
+        let snapshot = reader
+            .wait_next(Duration::from_secs(20))
+            .expect("receive")
+            .expect("a looped cut within 20 s");
+        assert!(snapshot.generation() > previous, "generations only grow");
+        previous = snapshot.generation();
+        assert!(recorded.contains(&&layer_fingerprints(snapshot.view(), true)));
+    }
+    drop(reader);
+    player.signal(Signal::INT);
+    assert!(player.wait_exit(Duration::from_secs(20)).success());
+
     recorder.signal(Signal::TERM);
     let mut recorder = recorder;
     assert!(recorder.wait_exit(Duration::from_secs(20)).success());
@@ -245,6 +285,7 @@ fn recorded_cuts_are_the_published_graphs_and_replay_republishes_them() {
     drop(writer);
     scene.assert_no_leftovers(Duration::from_secs(10));
     replayed.assert_no_leftovers(Duration::from_secs(10));
+    looped.assert_no_leftovers(Duration::from_secs(10));
 }
 
 /// Bytes in the files of a folder.

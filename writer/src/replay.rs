@@ -232,4 +232,3 @@ fn wait_until(publisher: &SegmentPublisher, due: Instant) -> Result<(), WriterWa
     }
     Ok(())
 }
-

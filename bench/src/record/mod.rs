@@ -79,7 +79,10 @@ struct Stream {
 
 impl Stream {
     fn new(scene: &TestScene, rate: f64) -> Result<Stream, Box<dyn std::error::Error>> {
-        let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams { seed: 7, scale: 1.0 });
+        let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
+            seed: 7,
+            scale: 1.0,
+        });
         let graph = ygg_dsg::layout::build(&dsg, Layout::Mint)?;
         let mut writer = SceneWriter::builder(&scene.name)
             .iceoryx_prefix(&scene.prefix)
@@ -118,11 +121,22 @@ impl Stream {
 /// Starts `ygg record` on `scene` into `dir` and waits for its ready line.
 fn start_recorder(scene: &TestScene, dir: &std::path::Path, watchdog: &Watchdog) -> Proc {
     let recorder = Proc::spawn(
-        scene.command("ygg", &["record", "--scene", &scene.name, "-o", &dir.display().to_string()]),
+        scene.command(
+            "ygg",
+            &[
+                "record",
+                "--scene",
+                &scene.name,
+                "-o",
+                &dir.display().to_string(),
+            ],
+        ),
         "recorder",
         watchdog,
     );
-    recorder.expect_line(Duration::from_secs(30), |l| l.contains("\"event\":\"ready\""));
+    recorder.expect_line(Duration::from_secs(30), |l| {
+        l.contains("\"event\":\"ready\"")
+    });
     recorder
 }
 
@@ -130,7 +144,10 @@ fn start_recorder(scene: &TestScene, dir: &std::path::Path, watchdog: &Watchdog)
 fn stop_recorder(mut recorder: Proc) -> Result<String, String> {
     recorder.signal(Signal::TERM);
     if !recorder.wait_exit(Duration::from_secs(30)).success() {
-        return Err(format!("the recorder failed: {}", recorder.stderr().join("\n")));
+        return Err(format!(
+            "the recorder failed: {}",
+            recorder.stderr().join("\n")
+        ));
     }
     Ok(recorder
         .stdout()
@@ -156,7 +173,10 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&args.dir)?;
     let mut stream = Stream::new(&scene, args.rate)?;
     let machine = crate::ladder::report::machine();
-    eprintln!("phase 1: paired publish() for {} minutes", args.pair_minutes);
+    eprintln!(
+        "phase 1: paired publish() for {} minutes",
+        args.pair_minutes
+    );
     let mut pair = Vec::new();
     let start = Instant::now();
     let mut window = 0usize;
@@ -196,7 +216,11 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
         mission.push(stream.tick(true, false)?);
         if last_note.elapsed() > Duration::from_secs(60) {
             last_note = Instant::now();
-            eprintln!("  {:.0} s, {} ticks", start.elapsed().as_secs_f64(), mission.len());
+            eprintln!(
+                "  {:.0} s, {} ticks",
+                start.elapsed().as_secs_f64(),
+                mission.len()
+            );
         }
     }
     // The last cut published is recorded before the recorder stops.
@@ -204,11 +228,16 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
     ygg_testkit::poll_until(Duration::from_secs(30), || {
         ygg_store::recording::Recording::open(&path)
             .ok()
-            .is_some_and(|r| r.cuts().last().is_some_and(|c| c.generation >= final_generation))
+            .is_some_and(|r| {
+                r.cuts()
+                    .last()
+                    .is_some_and(|c| c.generation >= final_generation)
+            })
     });
     let summary = stop_recorder(recorder)?;
     eprintln!("phase 3: reading the recording back");
-    let read = readback::measure(&path, &scene, &mission, args.replay_seconds)?;
+    let published: Vec<(u64, usize)> = mission.iter().map(|t| (t.generation, t.bytes)).collect();
+    let read = readback::measure(&path, &scene, &published, args.replay_seconds)?;
 
     let settled = |on: bool| -> Vec<f64> {
         pair.iter()

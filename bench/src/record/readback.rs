@@ -13,10 +13,9 @@ use ygg_store::recording::Recording;
 use ygg_testkit::TestScene;
 use ygg_testkit::stats::median;
 
-use super::Tick;
+use crate::ladder::harness::Target;
 use crate::ladder::workload::{Query, Workload};
 use crate::ladder::ygg::YggTarget;
-use crate::ladder::harness::Target;
 
 const REPEATS: usize = 7;
 
@@ -24,7 +23,9 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-fn median_of(mut f: impl FnMut() -> Result<f64, Box<dyn std::error::Error>>) -> Result<f64, Box<dyn std::error::Error>> {
+fn median_of(
+    mut f: impl FnMut() -> Result<f64, Box<dyn std::error::Error>>,
+) -> Result<f64, Box<dyn std::error::Error>> {
     let samples = (0..REPEATS).map(|_| f()).collect::<Result<Vec<_>, _>>()?;
     Ok(median(&samples).unwrap_or(f64::NAN))
 }
@@ -48,12 +49,12 @@ fn q1a_ns<V: SceneView>(view: &V, queries: &[Query]) -> f64 {
     median(&samples).unwrap_or(f64::NAN)
 }
 
-/// Measures the recording at `path` of the ticks `mission` of the writer of `scene`, and
-/// replays its last `replay_seconds`.
+/// Measures the recording at `path` of the writer of `scene`, whose ticks published
+/// `mission` (`(generation, bytes)` per tick), and replays its last `replay_seconds`.
 pub fn measure(
     path: &Path,
     scene: &TestScene,
-    mission: &[Tick],
+    mission: &[(u64, usize)],
     replay_seconds: f64,
 ) -> Result<Value, Box<dyn std::error::Error>> {
     let rec = Recording::open(path)?;
@@ -67,22 +68,20 @@ pub fn measure(
     let published: usize = first_cut_bytes
         + mission
             .iter()
-            .filter(|t| t.generation > g0 && t.generation <= gn)
-            .map(|t| t.bytes)
+            .filter(|(g, _)| *g > g0 && *g <= gn)
+            .map(|(_, bytes)| bytes)
             .sum::<usize>();
-    let missed = mission
-        .iter()
-        .filter(|t| t.generation > g0 && t.generation <= gn)
-        .count()
-        + 1
-        - cuts.len();
+    let missed = mission.iter().filter(|(g, _)| *g > g0 && *g <= gn).count() + 1 - cuts.len();
 
     let open_ms = median_of(|| {
         let t = Instant::now();
         Recording::open(path)?;
         Ok(ms(t.elapsed()))
     })?;
-    let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams { seed: 7, scale: 1.0 });
+    let dsg = ygg_dsg::office::generate(ygg_dsg::office::OfficeParams {
+        seed: 7,
+        scale: 1.0,
+    });
     let queries: Vec<Query> = Workload::generate(&dsg, 7, 4)
         .queries
         .into_iter()
@@ -147,7 +146,9 @@ pub fn measure(
     })?;
     let c = rec.changes(from, last, 0.05)?;
 
-    let start_ns = cuts[last].writer_unix_ns.saturating_sub((replay_seconds * 1e9) as u64);
+    let start_ns = cuts[last]
+        .writer_unix_ns
+        .saturating_sub((replay_seconds * 1e9) as u64);
     let from_cut = rec.cut_at_time(start_ns).unwrap_or(0);
     let after_first = (cuts[from_cut].writer_unix_ns - cuts[0].writer_unix_ns) as f64 / 1e9;
     let replay_default = replay(path, after_first, false)?;
@@ -177,11 +178,23 @@ pub fn measure(
 /// its end at 1x with `ygg serve --recording` (under `chrt -f 10` when `realtime`), and
 /// reports how far each interval between two cuts strayed from the recorded one (the
 /// player's own measurement, its summary line).
-fn replay(path: &Path, after_first: f64, realtime: bool) -> Result<Value, Box<dyn std::error::Error>> {
+fn replay(
+    path: &Path,
+    after_first: f64,
+    realtime: bool,
+) -> Result<Value, Box<dyn std::error::Error>> {
     let scene = TestScene::for_run("bench-replay");
     let ygg = ygg_testkit::binary("ygg");
     let from = format!("+{after_first:.6}");
-    let args = ["serve", "--scene", &scene.name, "--recording", path.to_str().ok_or("path")?, "--from", &from];
+    let args = [
+        "serve",
+        "--scene",
+        &scene.name,
+        "--recording",
+        path.to_str().ok_or("path")?,
+        "--from",
+        &from,
+    ];
     let mut command = if realtime {
         let mut c = std::process::Command::new("chrt");
         c.args(["-f", "10"]).arg(&ygg).args(args);
@@ -249,7 +262,9 @@ pub fn markdown(r: &Value) -> String {
         f(&p["publish_us_without"]["p99"]),
         yes(pr <= 1.1)
     );
-    let worst = f(&o["first_cut_ms"]).max(f(&o["last_cut_ms"])).max(f(&o["middle_cut_ms"]));
+    let worst = f(&o["first_cut_ms"])
+        .max(f(&o["last_cut_ms"]))
+        .max(f(&o["middle_cut_ms"]));
     s += &format!(
         "| any cut to its first Q1a answer ≤ 5 ms, first = last (fresh open: every segment validated) | first {:.2} ms, middle {:.2} ms, last {:.2} ms | {} |\n",
         f(&o["first_cut_ms"]),
@@ -282,7 +297,10 @@ pub fn markdown(r: &Value) -> String {
         c["nodes_moved"],
         yes(f(&c["cold_ms"]) <= 50.0)
     );
-    for (key, how) in [("replay", "`ygg serve --recording`"), ("replay_realtime", "the same under `chrt -f 10`")] {
+    for (key, how) in [
+        ("replay", "`ygg serve --recording`"),
+        ("replay_realtime", "the same under `chrt -f 10`"),
+    ] {
         let e = &b[key]["interval_error_ms"];
         s += &format!(
             "| replay at 1× ({how}): inter-cut timing within 1 ms p99 | p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms over {} cuts | {} |\n",
