@@ -3,14 +3,19 @@
 //! `export` follows a scene in this host's shared memory and puts each changed segment and
 //! each manifest on Zenoh as the same archived bytes; `import` validates what arrives and
 //! republishes complete cuts into the other host's shared memory, where readers attach as
-//! to any local writer. See [`keys`] for the key layout.
+//! to any local writer. See [`keys`] for the key layout. Links are mutual TLS with the
+//! fleet's CA ([`tls`], certificates by `certs`) and only `--allow`ed certificate
+//! identities exchange the scene ([`access`]); plain TCP only with `--insecure`.
 
+mod access;
+mod certs;
 mod cut;
 mod export;
 mod import;
 mod keys;
 mod network;
 mod put;
+mod tls;
 
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -46,6 +51,9 @@ enum Command {
     Import(import::ImportArgs),
     /// Put raw bytes on a Zenoh key once (to check what an importer does with them).
     Put(put::PutArgs),
+    /// Make a CA and a certificate per host for the relays' mutual TLS (in `--dir`; keys
+    /// mode 0600; an existing CA there signs new hosts).
+    Certs(certs::CertsArgs),
 }
 
 fn main() -> ExitCode {
@@ -64,6 +72,7 @@ fn main() -> ExitCode {
         Command::Export(args) => export::run(args, &stop).map_err(Into::into),
         Command::Import(args) => import::run(args, &stop).map_err(Into::into),
         Command::Put(args) => put::run(args).map_err(Into::into),
+        Command::Certs(args) => certs::run(args).map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
