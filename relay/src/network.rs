@@ -155,6 +155,20 @@ impl NetworkArgs {
             }
             return Ok(());
         };
+        // Zenoh's default listens on plain TCP on every interface: without --listen (and a
+        // file that sets it), a secure relay only connects.
+        let listen = "listen/endpoints";
+        if self.listen.is_empty()
+            && config.get_json(listen).ok() == zenoh::Config::default().get_json(listen).ok()
+        {
+            config.insert_json5(listen, "[]").map_err(|source| {
+                NetworkConfigError::TuningRefused {
+                    key: listen,
+                    value: "[]".to_owned(),
+                    source,
+                }
+            })?;
+        }
         for (key, option, given) in [
             ("connect/endpoints", "--connect", &self.connect),
             ("listen/endpoints", "--listen", &self.listen),
