@@ -39,15 +39,16 @@ enum Command {
     /// Put a local scene on Zenoh: each changed segment and each manifest, the same bytes
     /// as in shared memory; answer queries for the current snapshot.
     ///
-    /// Prints `sent generation=N ...` per snapshot and `writer gone` when the local writer
-    /// exits. Runs until SIGINT/SIGTERM.
+    /// Prints `sent generation=N ...` per snapshot, `writer gone` when the local writer
+    /// exits and `peers=N` when the number of linked peers changes. Runs until
+    /// SIGINT/SIGTERM.
     Export(export::ExportArgs),
     /// Republish a scene from Zenoh into local shared memory: validate every segment and
     /// manifest, publish only complete cuts, resync by query on a gap or a new exporter.
     ///
     /// Prints `published generation=N ...` per cut, `writer gone; ...` when the exporter,
-    /// its writer or the link goes, `dropped key=...` for invalid data. Runs until
-    /// SIGINT/SIGTERM.
+    /// its writer or the link goes, `dropped key=...` for invalid data, `peers=N` when the
+    /// number of linked peers changes. Runs until SIGINT/SIGTERM.
     Import(import::ImportArgs),
     /// Put raw bytes on a Zenoh key once (to check what an importer does with them).
     Put(put::PutArgs),
