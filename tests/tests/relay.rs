@@ -766,6 +766,18 @@ fn bad_arguments_are_refused_with_a_clear_error() {
     );
     let file = |name: &str| format!("{dir}/{name}");
     let (ca, cert, key) = (file("ca.pem"), file("robot.pem"), file("robot.key"));
+    // Plain TCP only when asked for, and then with a warning (a put to nobody on loopback).
+    let insecure = Command::new(&relay)
+        .args(["put", "--key", "a/b", "--file", &ca, "--settle-ms", "0"])
+        .args(["--connect", "tcp/127.0.0.1:9", "--insecure"])
+        .output()
+        .expect("run ygg-relay put --insecure");
+    let stderr = String::from_utf8_lossy(&insecure.stderr);
+    assert!(insecure.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: --insecure: plain TCP"),
+        "{stderr}"
+    );
     for (args, says) in [
         (
             vec!["export", "--scene", "s", "--key", "a/b"],
