@@ -24,6 +24,11 @@
 //!   tick's pose edit; send → received and decoded (`update_from_binary`), bytes per
 //!   message.
 //!
+//! The four relay cases run twice in the one run: over mutual TLS (the relay's default:
+//! certificates from `ygg-relay certs`, access control by identity; rows `link: "tls"`) and
+//! then over plain TCP (`--insecure`; rows `link: "tcp"`), each with a fresh writer of the
+//! same office and the same seeded edits. The spark_dsg row is `link: "zmq"`.
+//!
 //! With `--breakdown`, a reader of the robot's own scene (a thread here) records when each
 //! generation is visible on the robot, and the timed rows also give the writer's update +
 //! publish() call, that first hop, and the relay path from there to the remote reader.
@@ -77,7 +82,7 @@ pub struct RemoteArgs {
 
 /// Bound on any single wait.
 const STEP: Duration = Duration::from_secs(60);
-/// Zenoh port of the exporter.
+/// Zenoh port of the exporter over TLS (plain TCP: the next one).
 const PORT: u16 = 7447;
 /// ZMQ port of spark_dsg's sender.
 const ZMQ_PORT: u16 = 7450;
@@ -162,9 +167,29 @@ fn relay_binary() -> Result<PathBuf, String> {
     }
 }
 
+/// How the relays' link is secured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum LinkKind {
+    /// Mutual TLS with access control (the default).
+    Tls,
+    /// Plain TCP (`--insecure`).
+    Tcp,
+}
+
+impl LinkKind {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Tls => "tls",
+            Self::Tcp => "tcp",
+        }
+    }
+}
+
 /// One JSON row.
 struct Row {
     case: &'static str,
+    /// `tls`, `tcp` or `zmq` (spark_dsg).
+    link: &'static str,
     median_us: f64,
     p99_us: f64,
     bytes: f64,
@@ -196,11 +221,12 @@ struct Timing {
 }
 
 impl Row {
-    fn new(case: &'static str, latency_s: &[f64], bytes: f64) -> Self {
+    fn new(case: &'static str, link: &'static str, latency_s: &[f64], bytes: f64) -> Self {
         let us: Vec<f64> = latency_s.iter().map(|s| s * 1e6).collect();
         let (median_us, p99_us) = median_p99(&us).unwrap_or((f64::NAN, f64::NAN));
         Self {
             case,
+            link,
             median_us,
             p99_us,
             bytes,
@@ -211,7 +237,7 @@ impl Row {
 
     /// A row of updates timed by [`Relay::publish_and_wait`]; with per-hop medians when
     /// the local times were recorded.
-    fn timed(case: &'static str, timings: &[Timing], bytes: f64) -> Self {
+    fn timed(case: &'static str, link: LinkKind, timings: &[Timing], bytes: f64) -> Self {
         let remote: Vec<f64> = timings.iter().map(|t| t.remote).collect();
         let locals: Vec<(f64, f64)> = timings
             .iter()
@@ -225,12 +251,12 @@ impl Row {
         });
         Self {
             hops,
-            ..Self::new(case, &remote, bytes)
+            ..Self::new(case, link.name(), &remote, bytes)
         }
     }
 
     fn json(&self) -> serde_json::Value {
-        let mut row = serde_json::json!({"case": self.case, "median_us": self.median_us,
+        let mut row = serde_json::json!({"case": self.case, "link": self.link, "median_us": self.median_us,
             "p99_us": self.p99_us, "bytes": self.bytes, "samples": self.samples});
         if let Some(h) = self.hops {
             row["publish_call_us"] = h.publish_call_us.into();
@@ -439,9 +465,6 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     let relay_bin = relay_binary()?;
     let link = VethLink::create("yb")
         .map_err(|e| format!("ygg-bench remote cannot create its two hosts: {e}"))?;
-    let robot = TestScene::for_run("remote-robot");
-    let remote = TestScene::for_run("remote-host");
-    let key = format!("bench/{}", robot.name);
 
     let dsg = generate(OfficeParams {
         seed: 7,
@@ -458,144 +481,32 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
         .id;
     let graph = layout::build(&dsg, Layout::Mint)?;
     drop(dsg);
-    let writer = SceneWriter::builder(&robot.name)
-        .iceoryx_prefix(&robot.prefix)
-        .create(graph)?;
+    let pki = dir.path().join("pki");
+    make_certs(&relay_bin, &pki, &link)?;
 
-    let endpoint = link.endpoint(0, PORT);
-    let mut exporter_cmd = link.command(
-        0,
-        &relay_bin,
-        &[
-            "export",
-            "--scene",
-            &robot.name,
-            "--key",
-            &key,
-            "--listen",
-            &endpoint,
-        ],
-    );
-    robot.configure(&mut exporter_cmd);
-    let exporter = Proc::start(exporter_cmd, "exporter", Input::Null)?;
-    let mut importer_cmd = link.command(
-        1,
-        &relay_bin,
-        &[
-            "import",
-            "--key",
-            &key,
-            "--scene",
-            &remote.name,
-            "--connect",
-            &endpoint,
-        ],
-    );
-    remote.configure(&mut importer_cmd);
-    let importer = Proc::start(importer_cmd, "importer", Input::Null)?;
-    let mut writer = writer;
-    let t0 = Instant::now();
-    let first = writer.publish()?.generation;
-    let reader = SceneReader::builder(&remote.name)
-        .iceoryx_prefix(&remote.prefix)
-        .wait_for_writer(STEP)
-        .open()?;
-    let local = if args.breakdown {
-        Some(LocalWatch::start(&robot.name, &robot.prefix)?)
-    } else {
-        None
+    let cases = Cases {
+        updates,
+        resyncs,
+        ticks: (stream_s / TICK.as_secs_f64()) as usize,
+        breakdown: args.breakdown,
     };
-    let mut relay = Relay {
-        link: &link,
-        writer,
-        reader,
-        exporter,
-        importer,
-        local,
-    };
-    relay.wait_for(first, t0)?;
-    eprintln!(
-        "office across in {:.0} ms",
-        t0.elapsed().as_secs_f64() * 1e3
-    );
-
     let mut rows = Vec::new();
-    // One-pose updates: the stream's ticks that only append a pose.
-    let mut replay = SlamReplay::new(relay.writer.graph(), 7);
-    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
-    while lat.len() < updates {
-        let t0 = Instant::now();
-        let report = replay.step(relay.writer.graph_mut())?;
-        let (l, b) = relay.publish_and_wait(t0)?;
-        if report.objects_moved == 0 && report.objects_added == 0 && report.mesh_points == 0 {
-            lat.push(l);
-            bytes.push(b as f64);
-        }
-        std::thread::sleep(TICK);
+    for kind in [LinkKind::Tls, LinkKind::Tcp] {
+        let security = match kind {
+            LinkKind::Tls => Security::Tls(&pki),
+            LinkKind::Tcp => Security::Insecure,
+        };
+        rows.extend(relay_cases(
+            &link,
+            &relay_bin,
+            kind,
+            security,
+            graph.clone(),
+            &cases,
+        )?);
     }
-    rows.push(Row::timed("pose_update", &lat, median(&bytes)));
-    eprintln!("pose_update done");
-
-    // One-object moves.
-    let g = relay.writer.graph();
-    let object = layout::object_mesh_layers(g)
-        .into_iter()
-        .find_map(|(l, _)| g.layer_nodes(l).find_map(|m| g.parent(m)))
-        .ok_or("no object with a mesh")?;
-    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
-    for k in 0..updates {
-        let dx = if k % 2 == 0 { 0.03 } else { -0.03 };
-        let t0 = Instant::now();
-        move_object(relay.writer.graph_mut(), object, [dx, 0.0, 0.0])?;
-        let (l, b) = relay.publish_and_wait(t0)?;
-        lat.push(l);
-        bytes.push(b as f64);
-        std::thread::sleep(TICK);
-    }
-    rows.push(Row::timed("object_move", &lat, median(&bytes)));
-    eprintln!("object_move done");
-
-    // Resync after the link comes back.
-    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
-    for _ in 0..resyncs {
-        link.set_up(false)?;
-        let until = Instant::now() + STEP;
-        while relay.reader.writer_status() != WriterStatus::Gone {
-            let _ = relay.reader.wait_next(Duration::from_millis(50));
-            if Instant::now() > until {
-                return Err("the remote reader never reported the writer gone".into());
-            }
-        }
-        replay.step(relay.writer.graph_mut())?;
-        let generation = relay.writer.publish()?.generation;
-        let bytes0 = link.wire_bytes(relay.exporter.pid())?;
-        let t0 = Instant::now();
-        link.set_up(true)?;
-        lat.push(relay.wait_for(generation, t0)?);
-        std::thread::sleep(Duration::from_millis(200));
-        bytes.push((link.wire_bytes(relay.exporter.pid())? - bytes0) as f64);
-    }
-    rows.push(Row::new("resync_full_office", &lat, median(&bytes)));
-    eprintln!("resync done");
-
-    // The demo's SLAM stream at 30 Hz.
-    let ticks = (stream_s / TICK.as_secs_f64()) as usize;
-    let (mut lat, mut total) = (Vec::new(), 0u64);
-    for _ in 0..ticks {
-        let t0 = Instant::now();
-        replay.step(relay.writer.graph_mut())?;
-        let (l, b) = relay.publish_and_wait(t0)?;
-        lat.push(l);
-        total += b;
-        std::thread::sleep(TICK.saturating_sub(t0.elapsed()));
-    }
-    rows.push(Row::timed(
-        "stream_bytes_ygg",
-        &lat,
-        total as f64 / ticks as f64,
-    ));
-    eprintln!("stream_bytes_ygg done");
-    relay.stop();
+    drop(graph);
+    let ticks = cases.ticks;
 
     // spark_dsg's full-graph stream over the same link, for the same number of edits.
     let zmq_endpoint = format!("tcp://{}:{ZMQ_PORT}", link.address(0));
@@ -654,6 +565,7 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     drop(sender);
     rows.push(Row::new(
         "stream_bytes_spark_dsg_zmq",
+        "zmq",
         &lat,
         total as f64 / spark_ticks as f64,
     ));
@@ -671,12 +583,237 @@ pub fn run(args: &RemoteArgs) -> Result<(), Box<dyn std::error::Error>> {
     } else {
         println!("{json}");
     }
+    Ok(())
+}
+
+/// How many samples each relay case takes.
+struct Cases {
+    updates: usize,
+    resyncs: usize,
+    /// Ticks of the 30 Hz stream.
+    ticks: usize,
+    breakdown: bool,
+}
+
+/// How the relays are secured: certificates from this folder, or `--insecure`.
+#[derive(Clone, Copy)]
+enum Security<'a> {
+    /// Mutual TLS with the certificates `ygg-relay certs` made in this folder.
+    Tls(&'a Path),
+    /// Plain TCP.
+    Insecure,
+}
+
+impl Security<'_> {
+    /// The relay options of host `me`, exchanging the scene with `peer`.
+    fn args(self, me: &str, peer: &str) -> Vec<String> {
+        match self {
+            Self::Tls(dir) => {
+                let file = |name: String| dir.join(name).display().to_string();
+                vec![
+                    "--ca".into(),
+                    file("ca.pem".into()),
+                    "--cert".into(),
+                    file(format!("{me}.pem")),
+                    "--private-key".into(),
+                    file(format!("{me}.key")),
+                    "--allow".into(),
+                    peer.into(),
+                ]
+            }
+            Self::Insecure => vec!["--insecure".into()],
+        }
+    }
+}
+
+/// `ygg-relay certs` for `robot` (host 0) and `base` (host 1) in `dir`.
+fn make_certs(relay_bin: &Path, dir: &Path, link: &VethLink) -> Result<(), String> {
+    let (robot, base) = (
+        format!("robot={}", link.address(0)),
+        format!("base={}", link.address(1)),
+    );
+    let dir_arg = dir.to_str().ok_or("non-UTF-8 temp dir")?;
+    let out = Command::new(relay_bin)
+        .args(["certs", "--dir", dir_arg, "--host", &robot, "--host", &base])
+        .output()
+        .map_err(|e| format!("ygg-relay certs: {e}"))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "ygg-relay certs: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ))
+    }
+}
+
+/// The relay cases over one kind of link: a writer of `graph` on the robot, the relay
+/// pair, the remote reader; one-pose updates, object moves, resyncs, the 30 Hz stream.
+fn relay_cases(
+    link: &VethLink,
+    relay_bin: &Path,
+    kind: LinkKind,
+    security: Security<'_>,
+    graph: ygg_store::SceneGraph,
+    cases: &Cases,
+) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
+    let robot = TestScene::for_run("remote-robot");
+    let remote = TestScene::for_run("remote-host");
+    let key = format!("bench/{}", robot.name);
+
+    let writer = SceneWriter::builder(&robot.name)
+        .iceoryx_prefix(&robot.prefix)
+        .create(graph)?;
+
+    // Each kind its own port: the other run's connections may linger in TIME_WAIT.
+    let endpoint = match security {
+        Security::Tls(_) => format!("tls/{}:{PORT}", link.address(0)),
+        Security::Insecure => link.endpoint(0, PORT + 1),
+    };
+    let mut export_args = vec![
+        "export",
+        "--scene",
+        &robot.name,
+        "--key",
+        &key,
+        "--listen",
+        &endpoint,
+    ];
+    let robot_security = security.args("robot", "base");
+    export_args.extend(robot_security.iter().map(String::as_str));
+    let mut exporter_cmd = link.command(0, relay_bin, &export_args);
+    robot.configure(&mut exporter_cmd);
+    let exporter = Proc::start(exporter_cmd, "exporter", Input::Null)?;
+    let mut import_args = vec![
+        "import",
+        "--key",
+        &key,
+        "--scene",
+        &remote.name,
+        "--connect",
+        &endpoint,
+    ];
+    let base_security = security.args("base", "robot");
+    import_args.extend(base_security.iter().map(String::as_str));
+    let mut importer_cmd = link.command(1, relay_bin, &import_args);
+    remote.configure(&mut importer_cmd);
+    let importer = Proc::start(importer_cmd, "importer", Input::Null)?;
+    let mut writer = writer;
+    let t0 = Instant::now();
+    let first = writer.publish()?.generation;
+    let reader = SceneReader::builder(&remote.name)
+        .iceoryx_prefix(&remote.prefix)
+        .wait_for_writer(STEP)
+        .open()?;
+    let local = if cases.breakdown {
+        Some(LocalWatch::start(&robot.name, &robot.prefix)?)
+    } else {
+        None
+    };
+    let mut relay = Relay {
+        link,
+        writer,
+        reader,
+        exporter,
+        importer,
+        local,
+    };
+    relay.wait_for(first, t0)?;
+    eprintln!(
+        "{}: office across in {:.0} ms",
+        kind.name(),
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+
+    let mut rows = Vec::new();
+    // One-pose updates: the stream's ticks that only append a pose.
+    let mut replay = SlamReplay::new(relay.writer.graph(), 7);
+    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
+    while lat.len() < cases.updates {
+        let t0 = Instant::now();
+        let report = replay.step(relay.writer.graph_mut())?;
+        let (l, b) = relay.publish_and_wait(t0)?;
+        if report.objects_moved == 0 && report.objects_added == 0 && report.mesh_points == 0 {
+            lat.push(l);
+            bytes.push(b as f64);
+        }
+        std::thread::sleep(TICK);
+    }
+    rows.push(Row::timed("pose_update", kind, &lat, median(&bytes)));
+    eprintln!("{}: pose_update done", kind.name());
+
+    // One-object moves.
+    let g = relay.writer.graph();
+    let object = layout::object_mesh_layers(g)
+        .into_iter()
+        .find_map(|(l, _)| g.layer_nodes(l).find_map(|m| g.parent(m)))
+        .ok_or("no object with a mesh")?;
+    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
+    for k in 0..cases.updates {
+        let dx = if k % 2 == 0 { 0.03 } else { -0.03 };
+        let t0 = Instant::now();
+        move_object(relay.writer.graph_mut(), object, [dx, 0.0, 0.0])?;
+        let (l, b) = relay.publish_and_wait(t0)?;
+        lat.push(l);
+        bytes.push(b as f64);
+        std::thread::sleep(TICK);
+    }
+    rows.push(Row::timed("object_move", kind, &lat, median(&bytes)));
+    eprintln!("{}: object_move done", kind.name());
+
+    // Resync after the link comes back.
+    let (mut lat, mut bytes) = (Vec::new(), Vec::new());
+    for _ in 0..cases.resyncs {
+        link.set_up(false)?;
+        let until = Instant::now() + STEP;
+        while relay.reader.writer_status() != WriterStatus::Gone {
+            let _ = relay.reader.wait_next(Duration::from_millis(50));
+            if Instant::now() > until {
+                return Err("the remote reader never reported the writer gone".into());
+            }
+        }
+        replay.step(relay.writer.graph_mut())?;
+        let generation = relay.writer.publish()?.generation;
+        let bytes0 = link.wire_bytes(relay.exporter.pid())?;
+        let t0 = Instant::now();
+        link.set_up(true)?;
+        lat.push(relay.wait_for(generation, t0)?);
+        std::thread::sleep(Duration::from_millis(200));
+        bytes.push((link.wire_bytes(relay.exporter.pid())? - bytes0) as f64);
+    }
+    rows.push(Row::new(
+        "resync_full_office",
+        kind.name(),
+        &lat,
+        median(&bytes),
+    ));
+    eprintln!("{}: resync done", kind.name());
+
+    // The demo's SLAM stream at 30 Hz.
+    let ticks = cases.ticks;
+    let (mut lat, mut total) = (Vec::new(), 0u64);
+    for _ in 0..ticks {
+        let t0 = Instant::now();
+        replay.step(relay.writer.graph_mut())?;
+        let (l, b) = relay.publish_and_wait(t0)?;
+        lat.push(l);
+        total += b;
+        std::thread::sleep(TICK.saturating_sub(t0.elapsed()));
+    }
+    rows.push(Row::timed(
+        "stream_bytes_ygg",
+        kind,
+        &lat,
+        total as f64 / ticks as f64,
+    ));
+    eprintln!("{}: stream_bytes_ygg done", kind.name());
+    relay.stop();
     for scene in [&robot, &remote] {
         if let Some(left) = scene.clean_up() {
             eprintln!("warning: left in /dev/shm: {left}");
         }
     }
-    Ok(())
+    Ok(rows)
 }
 
 fn median(v: &[f64]) -> f64 {
@@ -691,7 +828,7 @@ fn report(
     load_after: &str,
     args: &RemoteArgs,
 ) -> String {
-    let find = |case: &str| rows.iter().find(|r| r.case == case);
+    let find = |case: &str, link: &str| rows.iter().find(|r| r.case == case && r.link == link);
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -703,14 +840,14 @@ fn report(
     );
     let _ = writeln!(
         out,
-        "| case | samples | median µs | p99 µs | bytes on the wire |"
+        "| case | link | samples | median µs | p99 µs | bytes on the wire |"
     );
-    let _ = writeln!(out, "|---|---|---|---|---|");
+    let _ = writeln!(out, "|---|---|---|---|---|---|");
     for r in rows {
         let _ = writeln!(
             out,
-            "| {} | {} | {:.0} | {:.0} | {:.0} |",
-            r.case, r.samples, r.median_us, r.p99_us, r.bytes
+            "| {} | {} | {} | {:.0} | {:.0} | {:.0} |",
+            r.case, r.link, r.samples, r.median_us, r.p99_us, r.bytes
         );
     }
     let _ = writeln!(
@@ -727,33 +864,39 @@ fn report(
         );
         let _ = writeln!(
             out,
-            "| case | update + publish() | → robot's reader | → remote (relay path) | remote |"
+            "| case | link | update + publish() | → robot's reader | → remote (relay path) | remote |"
         );
-        let _ = writeln!(out, "|---|---|---|---|---|");
+        let _ = writeln!(out, "|---|---|---|---|---|---|");
         for r in rows {
             if let Some(h) = r.hops {
                 let _ = writeln!(
                     out,
-                    "| {} | {:.0} | {:.0} | {:.0} | {:.0} |",
-                    r.case, h.publish_call_us, h.local_us, h.relay_us, r.median_us
+                    "| {} | {} | {:.0} | {:.0} | {:.0} | {:.0} |",
+                    r.case, r.link, h.publish_call_us, h.local_us, h.relay_us, r.median_us
                 );
             }
         }
         let _ = writeln!(out);
     }
-    if let Some(p) = find("pose_update") {
+    if let (Some(tls), Some(tcp)) = (find("pose_update", "tls"), find("pose_update", "tcp")) {
+        let ratio = tls.median_us / tcp.median_us;
         let _ = writeln!(
             out,
-            "- one-pose update visible remotely ≤ 2 ms p50: {:.2} ms — {}",
-            p.median_us / 1e3,
-            if p.median_us <= 2000.0 {
+            "- one-pose update visible remotely over TLS ≤ 1.2× plain TCP and ≤ 2 ms p50: \
+             {:.2} ms against {:.2} ms, {ratio:.2}× — {}",
+            tls.median_us / 1e3,
+            tcp.median_us / 1e3,
+            if ratio <= 1.2 && tls.median_us <= 2000.0 {
                 "met"
             } else {
                 "missed"
             }
         );
     }
-    if let (Some(y), Some(s)) = (find("stream_bytes_ygg"), find("stream_bytes_spark_dsg_zmq")) {
+    if let (Some(y), Some(s)) = (
+        find("stream_bytes_ygg", "tls"),
+        find("stream_bytes_spark_dsg_zmq", "zmq"),
+    ) {
         let ratio = y.bytes / s.bytes * 100.0;
         let _ = writeln!(
             out,
@@ -761,10 +904,10 @@ fn report(
             if ratio <= 2.0 { "met" } else { "missed" }
         );
     }
-    if let Some(r) = find("resync_full_office") {
+    if let Some(r) = find("resync_full_office", "tls") {
         let _ = writeln!(
             out,
-            "- full-office resync ≤ 1 s after the link comes back: {:.0} ms median, {:.0} ms p99 — {}",
+            "- full-office resync over TLS ≤ 1 s after the link comes back: {:.0} ms median, {:.0} ms p99 — {}",
             r.median_us / 1e3,
             r.p99_us / 1e3,
             if r.median_us <= 1e6 { "met" } else { "missed" }

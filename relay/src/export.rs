@@ -14,8 +14,9 @@ use zenoh::liveliness::LivelinessToken;
 use zenoh::qos::CongestionControl;
 use zenoh::query::Query;
 
+use crate::access::Role;
 use crate::keys::{DataKey, Item, SceneArgsError, SceneKeys, scene_keys};
-use crate::network::{NetworkArgs, SessionCloseError, SessionOpenError, close};
+use crate::network::{Access, NetworkArgs, PeerCount, SessionCloseError, SessionOpenError, close};
 
 /// Why the exporter stopped.
 #[derive(Debug, thiserror::Error)]
@@ -67,6 +68,10 @@ pub struct ExportArgs {
     /// The Zenoh key to export it under, e.g. `robots/r1/office`.
     #[arg(long)]
     pub key: String,
+    /// A certificate identity (a `--host` name of `ygg-relay certs`) this exporter serves
+    /// the scene to; nobody else can subscribe to it or query it. Repeatable.
+    #[arg(long = "allow", value_name = "NAME")]
+    pub allow: Vec<String>,
     /// How Zenoh connects.
     #[command(flatten)]
     pub network: NetworkArgs,
@@ -81,7 +86,11 @@ const POLL: Duration = Duration::from_millis(100);
 /// Bad arguments, a Zenoh session that cannot open, or a local reader that cannot be set up.
 pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), ExportError> {
     let keys = scene_keys(&args.scene, &args.key)?;
-    let session = args.network.open()?;
+    let session = args.network.open(Some(Access {
+        role: Role::Export,
+        keys: &keys,
+        identities: &args.allow,
+    }))?;
     let current: Arc<Mutex<Option<Arc<Snapshot>>>> = Arc::default();
     let answer_keys = keys.clone();
     let answer_current = Arc::clone(&current);
@@ -102,8 +111,10 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), ExportError> {
         token: None,
         sent: BTreeMap::new(),
     };
+    let mut peers = PeerCount::default();
     // The reader picks up a restarted writer by itself; only the first one is waited for.
     let mut reader = loop {
+        peers.update(&session);
         if stop.load(Ordering::Relaxed) {
             return Ok(close(&session)?);
         }
@@ -122,6 +133,7 @@ pub fn run(args: &ExportArgs, stop: &AtomicBool) -> Result<(), ExportError> {
         }
     };
     while !stop.load(Ordering::Relaxed) {
+        peers.update(&session);
         match reader.wait_next(POLL) {
             Ok(Some(snapshot)) => exporter.send(&snapshot)?,
             Ok(None) => {}

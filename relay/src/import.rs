@@ -16,9 +16,10 @@ use zenoh::bytes::ZBytes;
 use zenoh::query::ConsolidationMode;
 use zenoh::sample::{Sample, SampleKind};
 
+use crate::access::Role;
 use crate::cut::{Assembler, Cut};
 use crate::keys::{Item, SceneArgsError, SceneKeys, scene_keys};
-use crate::network::{NetworkArgs, SessionCloseError, SessionOpenError, close};
+use crate::network::{Access, NetworkArgs, PeerCount, SessionCloseError, SessionOpenError, close};
 
 /// Why the importer stopped.
 #[derive(Debug, thiserror::Error)]
@@ -86,6 +87,11 @@ pub struct ImportArgs {
     /// The local scene name to republish it as.
     #[arg(long)]
     pub scene: String,
+    /// The certificate identity (a `--host` name of `ygg-relay certs`) of the exporter this
+    /// importer takes the scene from; puts and replies on the key from anyone else are
+    /// dropped before they reach the importer. Repeatable (e.g. a spare exporter).
+    #[arg(long = "allow", value_name = "NAME")]
+    pub allow: Vec<String>,
     /// Readers the local scene supports at once.
     #[arg(long, default_value_t = DEFAULT_MAX_READERS)]
     pub max_readers: usize,
@@ -122,7 +128,11 @@ enum Event {
 /// published (for example one another writer on this host publishes).
 pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), ImportError> {
     let keys = scene_keys(&args.scene, &args.key)?;
-    let session = args.network.open()?;
+    let session = args.network.open(Some(Access {
+        role: Role::Import,
+        keys: &keys,
+        identities: &args.allow,
+    }))?;
     let (tx, rx) = mpsc::channel();
     let data_tx = tx.clone();
     let _subscriber = session
@@ -159,7 +169,9 @@ pub fn run(args: &ImportArgs, stop: &AtomicBool) -> Result<(), ImportError> {
         local: None,
         last_query: None,
     };
+    let mut peers = PeerCount::default();
     let result = loop {
+        peers.update(&session);
         if stop.load(Ordering::Relaxed) {
             break Ok(());
         }

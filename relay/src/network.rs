@@ -1,11 +1,17 @@
-//! The Zenoh session of a relay: explicit endpoints, no multicast scouting, and short
-//! leases and reconnect periods so that a broken link is noticed and healed within about a
-//! second.
+//! The Zenoh session of a relay: explicit endpoints, no multicast scouting, mutual TLS
+//! unless `--insecure` ([`crate::tls`]), access control by certificate identity
+//! ([`crate::access`]), and short leases and reconnect periods so that a broken link is
+//! noticed and healed within about a second.
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use clap::Args;
 use zenoh::Wait as _;
+
+use crate::access::{Role, access_control};
+use crate::keys::SceneKeys;
+use crate::tls::{TlsArgs, TlsError, require_tls};
 
 /// Reconnection settings a relay uses where its `--zenoh-config` file keeps Zenoh's defaults:
 /// retry every 100-250 ms (the default backs off to 4 s), keep retrying for good, and give
@@ -50,15 +56,31 @@ pub struct NetworkArgs {
     /// A Zenoh JSON5 configuration file applied first; the options above override it.
     #[arg(long, value_name = "FILE")]
     pub zenoh_config: Option<PathBuf>,
+    /// Mutual TLS (default) or `--insecure`.
+    #[command(flatten)]
+    pub tls: TlsArgs,
+}
+
+/// Who may exchange what with a session: the `--allow`ed certificate identities, in the
+/// role of `export` or `import`, on one scene's keys. `put` has none.
+#[derive(Clone, Copy, Debug)]
+pub struct Access<'a> {
+    /// Export or import.
+    pub role: Role,
+    /// The scene's keys.
+    pub keys: &'a SceneKeys,
+    /// The certificate common names allowed.
+    pub identities: &'a [String],
 }
 
 impl NetworkArgs {
     /// The Zenoh configuration these arguments describe. Multicast scouting and gossip are
-    /// off: a relay talks only to the endpoints it is given.
+    /// off: a relay talks only to the endpoints it is given. Every link is mutual TLS and,
+    /// with `access`, only the allowed identities exchange the scene, unless `--insecure`.
     ///
     /// # Errors
     /// [`NetworkConfigError`] naming the option or file Zenoh rejected.
-    pub fn config(&self) -> Result<zenoh::Config, NetworkConfigError> {
+    pub fn config(&self, access: Option<Access<'_>>) -> Result<zenoh::Config, NetworkConfigError> {
         if self.connect.is_empty() && self.listen.is_empty() {
             return Err(NetworkConfigError::NoEndpoint);
         }
@@ -98,6 +120,7 @@ impl NetworkArgs {
                 }
             })?;
         }
+        self.secure(&mut config, access)?;
         // Tuned for healing a link within about a second, where the file keeps Zenoh's default.
         let defaults = zenoh::Config::default();
         let block_limit = (lease * 1000 / 2).to_string();
@@ -119,13 +142,78 @@ impl NetworkArgs {
         Ok(config)
     }
 
-    /// Opens the Zenoh session.
+    /// Sets mutual TLS and access control, and checks that every endpoint is TLS (or warns
+    /// once with `--insecure`).
+    fn secure(
+        &self,
+        config: &mut zenoh::Config,
+        access: Option<Access<'_>>,
+    ) -> Result<(), NetworkConfigError> {
+        let Some(files) = self.tls.files()? else {
+            if access.is_some_and(|a| !a.identities.is_empty()) {
+                return Err(NetworkConfigError::AllowWithoutTls);
+            }
+            return Ok(());
+        };
+        // Zenoh's default listens on plain TCP on every interface: without --listen (and a
+        // file that sets it), a secure relay only connects.
+        let listen = "listen/endpoints";
+        if self.listen.is_empty()
+            && config.get_json(listen).ok() == zenoh::Config::default().get_json(listen).ok()
+        {
+            config.insert_json5(listen, "[]").map_err(|source| {
+                NetworkConfigError::TuningRefused {
+                    key: listen,
+                    value: "[]".to_owned(),
+                    source,
+                }
+            })?;
+        }
+        for (key, option, given) in [
+            ("connect/endpoints", "--connect", &self.connect),
+            ("listen/endpoints", "--listen", &self.listen),
+        ] {
+            let option = if given.is_empty() {
+                "--zenoh-config"
+            } else {
+                option
+            };
+            require_tls(option, &config.get_json(key).unwrap_or_default())?;
+        }
+        for (key, value) in files.settings() {
+            config.insert_json5(key, &value).map_err(|source| {
+                NetworkConfigError::OptionRefused {
+                    option: "--ca, --cert, --private-key",
+                    key,
+                    value: value.clone(),
+                    source,
+                }
+            })?;
+        }
+        if let Some(access) = access {
+            if access.identities.is_empty() {
+                return Err(NetworkConfigError::NoIdentity);
+            }
+            let setting = access_control(access.role, access.keys, access.identities);
+            config
+                .insert_json5("access_control", &setting)
+                .map_err(|source| NetworkConfigError::OptionRefused {
+                    option: "--allow",
+                    key: "access_control",
+                    value: setting.clone(),
+                    source,
+                })?;
+        }
+        Ok(())
+    }
+
+    /// Opens the Zenoh session; `access` as in [`config`](Self::config).
     ///
     /// # Errors
     /// [`SessionOpenError`]: the configuration problem or why Zenoh could not start (for
     /// example a `--listen` address this host does not have).
-    pub fn open(&self) -> Result<zenoh::Session, SessionOpenError> {
-        let config = self.config()?;
+    pub fn open(&self, access: Option<Access<'_>>) -> Result<zenoh::Session, SessionOpenError> {
+        let config = self.config(access)?;
         zenoh::open(config).wait().map_err(SessionOpenError::Open)
     }
 }
@@ -138,9 +226,46 @@ pub fn close(session: &zenoh::Session) -> Result<(), SessionCloseError> {
     session.close().wait().map_err(SessionCloseError)
 }
 
+/// Prints `peers=N` when the number of Zenoh peers this session has links to changes
+/// (checked at most every 100 ms): a peer the TLS handshake refused never counts.
+#[derive(Debug, Default)]
+pub struct PeerCount {
+    last: Option<usize>,
+    checked: Option<Instant>,
+}
+
+impl PeerCount {
+    /// Checks the count, and prints it if it changed.
+    pub fn update(&mut self, session: &zenoh::Session) {
+        if self
+            .checked
+            .is_some_and(|at| at.elapsed() < Duration::from_millis(100))
+        {
+            return;
+        }
+        self.checked = Some(Instant::now());
+        let peers = session.info().peers_zid().wait().count();
+        if self.last != Some(peers) {
+            self.last = Some(peers);
+            println!("peers={peers}");
+        }
+    }
+}
+
 /// The network options do not make a Zenoh configuration.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkConfigError {
+    /// The security options are incomplete or an endpoint is not TLS.
+    #[error(transparent)]
+    Tls(#[from] TlsError),
+    /// Mutual TLS without `--allow`: nobody could exchange the scene.
+    #[error(
+        "give --allow NAME: the certificate identity (the --host name given to `ygg-relay          certs`) of each peer this relay exchanges the scene with"
+    )]
+    NoIdentity,
+    /// `--allow` with `--insecure`: plain TCP carries no identity to check.
+    #[error("--allow needs mutual TLS: plain TCP (--insecure) carries no certificate identity")]
+    AllowWithoutTls,
     /// Neither `--connect` nor `--listen` was given.
     #[error("give at least one --connect or --listen endpoint (e.g. --listen tcp/10.0.0.1:7447)")]
     NoEndpoint,
@@ -203,17 +328,24 @@ mod tests {
             mode: "peer".into(),
             lease_ms: 1000,
             zenoh_config: None,
+            tls: TlsArgs {
+                insecure: true,
+                ..TlsArgs::default()
+            },
         }
     }
 
     #[test]
     fn endpoints_are_required_and_checked() {
-        let err = args(&[], &[]).config().unwrap_err().to_string();
+        let err = args(&[], &[]).config(None).unwrap_err().to_string();
         assert!(err.contains("--connect"), "{err}");
-        let err = args(&["nonsense"], &[]).config().unwrap_err().to_string();
+        let err = args(&["nonsense"], &[])
+            .config(None)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("--connect"), "{err}");
         let config = args(&["tcp/10.0.0.1:7447"], &["tcp/10.0.0.2:7447"])
-            .config()
+            .config(None)
             .expect("valid endpoints");
         let multicast = config.get_json("scouting/multicast/enabled").expect("key");
         assert_eq!(multicast, "false");
@@ -238,7 +370,7 @@ mod tests {
         std::fs::write(&path, "{transport: {unicast: {open_timeout: 2500}}}").expect("write");
         let mut with_file = args(&["tcp/10.0.0.1:7447"], &[]);
         with_file.zenoh_config = Some(path);
-        let config = with_file.config().expect("valid config");
+        let config = with_file.config(None).expect("valid config");
         let open_timeout = config
             .get_json("transport/unicast/open_timeout")
             .expect("key");

@@ -46,7 +46,8 @@ pub struct PutArgs {
     /// File whose bytes to put; `-` or absent reads standard input.
     #[arg(long)]
     pub file: Option<PathBuf>,
-    /// Milliseconds to wait for the peers to connect before putting.
+    /// Milliseconds to wait for the peers to connect before putting (the output's `peers=`
+    /// says how many did).
     #[arg(long, default_value_t = 1000)]
     pub settle_ms: u64,
     /// How Zenoh connects.
@@ -76,8 +77,10 @@ pub fn run(args: &PutArgs) -> Result<(), PutError> {
                 })?;
         }
     }
-    let session = args.network.open()?;
+    let session = args.network.open(None)?;
     std::thread::sleep(Duration::from_millis(args.settle_ms));
+    // A peer whose TLS handshake failed is not counted: the put then reaches nobody.
+    let peers = session.info().peers_zid().wait().count();
     session
         .put(&args.key, payload.clone())
         .wait()
@@ -85,6 +88,6 @@ pub fn run(args: &PutArgs) -> Result<(), PutError> {
             key: args.key.clone(),
             source,
         })?;
-    println!("put key={} bytes={}", args.key, payload.len());
+    println!("put key={} bytes={} peers={peers}", args.key, payload.len());
     Ok(close(&session)?)
 }

@@ -1,6 +1,8 @@
 //! `ygg-relay` across two real network stacks: two network namespaces joined by a veth
 //! pair, the writer and `ygg-relay export` in one, `ygg-relay import` and the readers in the
-//! other, Zenoh with explicit endpoints on the pair's addresses and scouting off.
+//! other, Zenoh with explicit endpoints on the pair's addresses and scouting off, every link
+//! mutual TLS with certificates `ygg-relay certs` makes (hosts `robot` and `base`, plus an
+//! `intruder` of the same CA and a `robot` and a `base` of another CA for the attacks).
 //!
 //! Each side has its own iceoryx2 prefix (its own "host"), so the remote readers can only
 //! see what crossed the link. The tests create the namespaces and tear them down
@@ -47,8 +49,13 @@ impl Link {
         command
     }
 
-    /// `tcp/<address of side>:<port>`.
+    /// `tls/<address of side>:<port>`.
     fn endpoint(&self, side: usize, port: u16) -> String {
+        format!("tls/{}:{port}", self.0.address(side))
+    }
+
+    /// `tcp/<address of side>:<port>` (plain TCP, for the attacks).
+    fn tcp_endpoint(&self, side: usize, port: u16) -> String {
         self.0.endpoint(side, port)
     }
 
@@ -58,13 +65,22 @@ impl Link {
     }
 }
 
-/// The robot side's scene and the remote side's, each with its own prefix.
+/// The robot side's scene and the remote side's, each with its own prefix, and the
+/// certificates.
 struct Hosts {
     link: Link,
     robot: TestScene,
     remote: TestScene,
     key: String,
+    /// `fleet/`: the CA of `robot` (host 0), `base` (host 1) and `intruder`; `foreign/`:
+    /// another CA's `robot` and `base`.
+    pki: tempfile::TempDir,
 }
+
+/// The fleet's CA (the one the relays trust).
+const FLEET: &str = "fleet";
+/// Another CA, with certificates of the same names.
+const FOREIGN: &str = "foreign";
 
 impl Hosts {
     fn new(tag: &str) -> Option<Self> {
@@ -77,12 +93,53 @@ impl Hosts {
         let robot = TestScene::new(tag);
         let remote = TestScene::new(tag);
         let key = format!("test/{}", robot.name);
+        let pki = tempfile::tempdir().expect("temp dir");
+        let (robot_host, base_host) = (
+            format!("robot={}", link.0.address(0)),
+            format!("base={}", link.0.address(1)),
+        );
+        for (ca, hosts) in [
+            (FLEET, vec![&robot_host, &base_host, &"intruder".to_owned()]),
+            (FOREIGN, vec![&robot_host, &base_host]),
+        ] {
+            let dir = pki.path().join(ca);
+            let mut args = vec!["certs", "--dir", dir.to_str().expect("utf-8")];
+            for host in hosts {
+                args.extend(["--host", host.as_str()]);
+            }
+            let out = Command::new(binary("ygg-relay"))
+                .args(&args)
+                .output()
+                .expect("run ygg-relay certs");
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
         Some(Self {
             link,
             robot,
             remote,
             key,
+            pki,
         })
+    }
+
+    /// `--ca --cert --private-key` of `host` from `ca`'s folder.
+    fn tls(&self, ca: &str, host: &str) -> Vec<String> {
+        let file = |name: &str| {
+            let path = self.pki.path().join(ca).join(name);
+            path.to_str().expect("utf-8").to_owned()
+        };
+        vec![
+            "--ca".into(),
+            file("ca.pem"),
+            "--cert".into(),
+            file(&format!("{host}.pem")),
+            "--private-key".into(),
+            file(&format!("{host}.key")),
+        ]
     }
 
     /// `ygg serve` of a small office on the robot at `rate` updates per second, its
@@ -108,7 +165,8 @@ impl Hosts {
     /// `ygg-relay export` on the robot, listening on the robot's address.
     fn exporter(&self, watchdog: &Watchdog) -> Proc {
         let listen = self.link.endpoint(0, PORT);
-        let args = [
+        let tls = self.tls(FLEET, "robot");
+        let mut args = vec![
             "export",
             "--scene",
             &self.robot.name,
@@ -116,19 +174,42 @@ impl Hosts {
             &self.key,
             "--listen",
             &listen,
+            "--allow",
+            "base",
         ];
+        args.extend(tls.iter().map(String::as_str));
         let command = self
             .link
             .command(0, &self.robot, &binary("ygg-relay"), &args);
         Proc::spawn(command, "exporter", watchdog)
     }
 
-    /// `ygg-relay import` on the remote host into `scene`, connecting to the exporter and
-    /// listening on the remote address.
+    /// `ygg-relay import` on the remote host into `scene` as `base`, trusting `robot`,
+    /// connecting to the exporter and listening on the remote address.
     fn importer(&self, scene: &TestScene, watchdog: &Watchdog) -> Proc {
-        let connect = self.link.endpoint(0, PORT);
         let listen = self.link.endpoint(1, IMPORT_PORT);
-        let args = [
+        let mut security = self.tls(FLEET, "base");
+        security.extend(["--listen".into(), listen]);
+        self.importer_as(scene, &security, "importer", watchdog)
+    }
+
+    /// `ygg-relay import` on the remote host into `scene`, trusting `robot` (unless
+    /// `--insecure`) and connecting to the exporter, with `security` (certificate options,
+    /// or an attacker's).
+    fn importer_as(
+        &self,
+        scene: &TestScene,
+        security: &[String],
+        label: &str,
+        watchdog: &Watchdog,
+    ) -> Proc {
+        let insecure = security.iter().any(|a| a == "--insecure");
+        let connect = if insecure {
+            self.link.tcp_endpoint(0, PORT)
+        } else {
+            self.link.endpoint(0, PORT)
+        };
+        let mut args = vec![
             "import",
             "--key",
             &self.key,
@@ -136,11 +217,50 @@ impl Hosts {
             &scene.name,
             "--connect",
             &connect,
-            "--listen",
-            &listen,
         ];
+        // Plain TCP carries no identity to allow: such an importer takes from anyone.
+        if !insecure {
+            args.extend(["--allow", "robot"]);
+        }
+        args.extend(security.iter().map(String::as_str));
         let command = self.link.command(1, scene, &binary("ygg-relay"), &args);
-        Proc::spawn(command, "importer", watchdog)
+        Proc::spawn(command, label, watchdog)
+    }
+
+    /// `ygg-relay put` of `bytes` on `key` from the robot's host to the importer, with
+    /// `security`; returns its `peers=` (how many peers it had a link to when it put).
+    fn put(&self, key: &str, bytes: &[u8], connect: &str, security: &[String]) -> usize {
+        let file = std::env::temp_dir().join(format!("{}-put", self.robot.name));
+        std::fs::write(&file, bytes).expect("write the payload");
+        let mut args = vec![
+            "put",
+            "--key",
+            key,
+            "--file",
+            file.to_str().expect("utf-8"),
+            "--connect",
+            connect,
+            "--settle-ms",
+            "500",
+        ];
+        args.extend(security.iter().map(String::as_str));
+        let out = self
+            .link
+            .command(0, &self.robot, &binary("ygg-relay"), &args)
+            .output()
+            .expect("run ygg-relay put");
+        let _ = std::fs::remove_file(&file);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout
+            .lines()
+            .find_map(|l| field(l, "peers"))
+            .and_then(|p| p.parse().ok())
+            .unwrap_or_else(|| panic!("no peers= in {stdout}"))
     }
 
     /// `ygg <args>` on the remote host, on `scene`.
@@ -342,6 +462,16 @@ fn a_late_importer_resyncs_by_query_and_remote_answers_equal_local_ones() {
     hosts.robot.assert_no_leftovers(Duration::from_secs(5));
 }
 
+/// Garbage on the key: a segment, a manifest and a foreign key, as (key, bytes).
+fn garbage(base: &str) -> [(String, Vec<u8>); 3] {
+    let session = "0123456789abcdef";
+    [
+        (format!("{base}/{session}/0/999999"), vec![0xAB; 4096]),
+        (format!("{base}/{session}/manifest/999999"), vec![0xCD; 512]),
+        (format!("{base}/not/a/segment"), b"hello".to_vec()),
+    ]
+}
+
 #[test]
 fn live_updates_cross_byte_for_byte_and_garbage_on_the_key_is_dropped() {
     let Some(hosts) = Hosts::new("relay-live") else {
@@ -358,43 +488,12 @@ fn live_updates_cross_byte_for_byte_and_garbage_on_the_key_is_dropped() {
     remote.wait_beyond(first + 20);
 
     // Garbage from another peer on the key: a segment, a manifest and a foreign key.
-    let session = "0123456789abcdef";
-    for (key, bytes) in [
-        (
-            format!("{}/{session}/0/999999", hosts.key),
-            vec![0xAB; 4096],
-        ),
-        (
-            format!("{}/{session}/manifest/999999", hosts.key),
-            vec![0xCD; 512],
-        ),
-        (format!("{}/not/a/segment", hosts.key), b"hello".to_vec()),
-    ] {
-        let file = std::env::temp_dir().join(format!("{}-garbage", hosts.robot.name));
-        std::fs::write(&file, &bytes).expect("write garbage");
-        let connect = hosts.link.endpoint(1, IMPORT_PORT);
-        let args = [
-            "put",
-            "--key",
-            &key,
-            "--file",
-            file.to_str().expect("utf-8"),
-            "--connect",
-            &connect,
-            "--settle-ms",
-            "500",
-        ];
-        let out = hosts
-            .link
-            .command(0, &hosts.robot, &binary("ygg-relay"), &args)
-            .output()
-            .expect("run ygg-relay put");
-        let _ = std::fs::remove_file(&file);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+    // Put from the trusted identity: access control lets it in, validation drops it.
+    let trusted = hosts.tls(FLEET, "robot");
+    let connect = hosts.link.endpoint(1, IMPORT_PORT);
+    for (key, bytes) in garbage(&hosts.key) {
+        let peers = hosts.put(&key, &bytes, &connect, &trusted);
+        assert_eq!(peers, 1, "the trusted put did not connect");
         importer.expect_line(STEP, |l| {
             field(l, "key") == Some(key.as_str()) && l.starts_with("dropped")
         });
@@ -413,6 +512,158 @@ fn live_updates_cross_byte_for_byte_and_garbage_on_the_key_is_dropped() {
     terminate(&mut importer);
     terminate(&mut exporter);
     terminate(&mut writer);
+    hosts.remote.assert_no_leftovers(Duration::from_secs(5));
+    hosts.robot.assert_no_leftovers(Duration::from_secs(5));
+}
+
+/// The newest `peers=N` a relay printed.
+fn peers(relay: &Proc) -> Option<usize> {
+    relay
+        .stdout()
+        .iter()
+        .rev()
+        .find_map(|l| field(l, "peers").and_then(|p| p.parse().ok()))
+}
+
+/// Asserts that an attacking importer got nothing: it never saw the exporter nor published
+/// a cut, and no byte of the scene is in its shared memory.
+fn assert_got_nothing(attacker: &Proc, scene: &TestScene) {
+    let lines = attacker.stdout();
+    assert!(
+        !lines
+            .iter()
+            .any(|l| l.starts_with("published") || l.starts_with("exporter alive")),
+        "{}",
+        attacker.describe()
+    );
+    assert!(scene.files().is_empty(), "{:?}", scene.files());
+}
+
+#[test]
+fn peers_without_the_fleet_s_certificate_or_identity_get_nothing_in_or_out() {
+    let Some(hosts) = Hosts::new("relay-attacks") else {
+        return;
+    };
+    let watchdog = Watchdog::new(WATCHDOG);
+    let mut writer = hosts.writer("20", &watchdog);
+    let mut exporter = hosts.exporter(&watchdog);
+    let mut importer = hosts.importer(&hosts.remote, &watchdog);
+    importer.expect_line(STEP, |l| l.starts_with("published generation="));
+    exporter.expect_line(STEP, |l| l == "peers=1");
+    let local = Recorder::start(&hosts.robot);
+    let remote = Recorder::start(&hosts.remote);
+    let first = remote.wait_beyond(0);
+
+    // Puts on the importer's key: garbage, which the importer would log as dropped had it
+    // reached it (the trusted put of `live_updates_...` is).
+    let tls = hosts.link.endpoint(1, IMPORT_PORT);
+    let tcp = hosts.link.tcp_endpoint(1, IMPORT_PORT);
+    let no_client_cert = hosts.pki.path().join("no-client-cert.json5");
+    let fleet_ca = hosts.pki.path().join(FLEET).join("ca.pem");
+    std::fs::write(
+        &no_client_cert,
+        format!(
+            "{{transport: {{link: {{tls: {{root_ca_certificate: {:?}}}}}}}}}",
+            fleet_ca.to_str().expect("utf-8")
+        ),
+    )
+    .expect("write the zenoh config");
+    let insecure = vec!["--insecure".to_owned()];
+    let tls_without_cert = vec![
+        "--insecure".to_owned(),
+        "--zenoh-config".to_owned(),
+        no_client_cert.to_str().expect("utf-8").to_owned(),
+    ];
+    let attacks = [
+        ("plain TCP", &tcp, insecure.clone(), 0),
+        (
+            "TLS without a client certificate",
+            &tls,
+            tls_without_cert.clone(),
+            0,
+        ),
+        (
+            "`robot` of another CA",
+            &tls,
+            hosts.tls(FOREIGN, "robot"),
+            0,
+        ),
+        (
+            "`intruder` of the fleet's CA",
+            &tls,
+            hosts.tls(FLEET, "intruder"),
+            1,
+        ),
+    ];
+    for (attack, connect, security, linked) in &attacks {
+        for (key, bytes) in garbage(&hosts.key) {
+            let peers = hosts.put(&key, &bytes, connect, security);
+            assert_eq!(peers, *linked, "{attack}: links when putting");
+        }
+        eprintln!("put attack done: {attack}");
+    }
+    let after_puts = remote.wait_beyond(first);
+    remote.wait_beyond(after_puts + 10);
+    assert!(
+        !importer.stdout().iter().any(|l| l.starts_with("dropped")),
+        "an unauthorised put reached the importer: {}",
+        importer.describe()
+    );
+
+    // Reads of the exporter's scene: importers that trust `robot` but are not `base` of
+    // the fleet's CA.
+    let mut scenes = Vec::new();
+    let mut attackers = Vec::new();
+    for (label, security) in [
+        ("plain TCP importer", insecure),
+        ("importer without a client certificate", tls_without_cert),
+        ("`base` of another CA", hosts.tls(FOREIGN, "base")),
+    ] {
+        let scene = TestScene::new("relay-stolen");
+        attackers.push(hosts.importer_as(&scene, &security, label, &watchdog));
+        scenes.push(scene);
+    }
+    for attacker in &attackers {
+        attacker.expect_line(STEP, |l| l.starts_with("importing"));
+    }
+    let newest = remote.wait_beyond(0);
+    remote.wait_beyond(newest + 10);
+    assert_eq!(peers(&exporter), Some(1), "{}", exporter.describe());
+    // The fleet's `intruder`: its link opens, and nothing crosses it.
+    let seen = exporter.count_lines(|_| true);
+    let scene = TestScene::new("relay-stolen");
+    let intruder = hosts.importer_as(&scene, &hosts.tls(FLEET, "intruder"), "intruder", &watchdog);
+    exporter
+        .wait_line_after(seen, STEP, |l| l == "peers=2")
+        .unwrap_or_else(|| panic!("the intruder never linked: {}", exporter.describe()));
+    intruder.expect_line(STEP, |l| l == "peers=1");
+    attackers.push(intruder);
+    scenes.push(scene);
+    let newest = remote.wait_beyond(0);
+    remote.wait_beyond(newest + 10);
+    for (attacker, scene) in attackers.iter().zip(&scenes) {
+        assert_got_nothing(attacker, scene);
+    }
+
+    // The legitimate link worked throughout, byte for byte.
+    assert_eq!(
+        remote.gone.load(Ordering::Relaxed),
+        0,
+        "the remote writer went"
+    );
+    assert_same_snapshots(&local, &remote, 40);
+
+    for attacker in &mut attackers {
+        terminate(attacker);
+    }
+    drop(remote);
+    drop(local);
+    terminate(&mut importer);
+    terminate(&mut exporter);
+    terminate(&mut writer);
+    for scene in &scenes {
+        scene.assert_no_leftovers(Duration::from_secs(5));
+    }
     hosts.remote.assert_no_leftovers(Duration::from_secs(5));
     hosts.robot.assert_no_leftovers(Duration::from_secs(5));
 }
@@ -502,6 +753,31 @@ fn link_down_up_and_a_killed_exporter_leave_remote_readers_stale_then_resync() {
 #[test]
 fn bad_arguments_are_refused_with_a_clear_error() {
     let relay = binary("ygg-relay");
+    let pki = tempfile::tempdir().expect("temp dir");
+    let dir = pki.path().to_str().expect("utf-8").to_owned();
+    let out = Command::new(&relay)
+        .args(["certs", "--dir", &dir, "--host", "robot"])
+        .output()
+        .expect("run ygg-relay certs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let file = |name: &str| format!("{dir}/{name}");
+    let (ca, cert, key) = (file("ca.pem"), file("robot.pem"), file("robot.key"));
+    // Plain TCP only when asked for, and then with a warning (a put to nobody on loopback).
+    let insecure = Command::new(&relay)
+        .args(["put", "--key", "a/b", "--file", &ca, "--settle-ms", "0"])
+        .args(["--connect", "tcp/127.0.0.1:9", "--insecure"])
+        .output()
+        .expect("run ygg-relay put --insecure");
+    let stderr = String::from_utf8_lossy(&insecure.stderr);
+    assert!(insecure.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("warning: --insecure: plain TCP"),
+        "{stderr}"
+    );
     for (args, says) in [
         (
             vec!["export", "--scene", "s", "--key", "a/b"],
@@ -544,6 +820,93 @@ fn bad_arguments_are_refused_with_a_clear_error() {
             "--connect",
         ),
         (vec!["import", "--key", "a/b"], "--scene"),
+        (
+            vec![
+                "export",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--listen",
+                "tls/127.0.0.1:0",
+            ],
+            "--ca, --cert and --private-key",
+        ),
+        (
+            vec![
+                "export",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--listen",
+                "tcp/127.0.0.1:0",
+                "--ca",
+                &ca,
+                "--cert",
+                &cert,
+                "--private-key",
+                &key,
+            ],
+            "--listen tcp/127.0.0.1:0: links are mutual TLS by default",
+        ),
+        (
+            vec![
+                "export",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--listen",
+                "tls/127.0.0.1:0",
+                "--ca",
+                &ca,
+                "--cert",
+                &cert,
+                "--private-key",
+                &key,
+            ],
+            "give --allow NAME",
+        ),
+        (
+            vec![
+                "export",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--listen",
+                "tls/127.0.0.1:0",
+                "--ca",
+                &ca,
+                "--cert",
+                &key,
+                "--private-key",
+                &key,
+                "--allow",
+                "base",
+            ],
+            "--cert",
+        ),
+        (
+            vec![
+                "import",
+                "--scene",
+                "s",
+                "--key",
+                "a/b",
+                "--connect",
+                "tcp/127.0.0.1:9",
+                "--insecure",
+                "--allow",
+                "robot",
+            ],
+            "--allow needs mutual TLS",
+        ),
+        (
+            vec!["certs", "--dir", &dir, "--host", "robot=not an address"],
+            "neither an IP address nor a DNS name",
+        ),
     ] {
         let out = Command::new(&relay)
             .args(&args)
