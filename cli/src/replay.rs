@@ -26,8 +26,9 @@ pub struct ReplayArgs<'a> {
     pub seconds: Option<f64>,
 }
 
-/// Plays the recording; prints `ready`, `progress` (each second) and `summary` lines as
-/// `ygg serve` does.
+/// Plays the recording, then keeps serving its last cut (as `ygg serve` serves its scene)
+/// until SIGINT/SIGTERM or `--seconds`; prints `ready`, `progress` (each second), `end`
+/// (the last cut went out) and `summary` lines.
 ///
 /// # Errors
 /// A message naming the recording or the scene.
@@ -72,7 +73,22 @@ pub fn run(args: &ReplayArgs<'_>) -> Result<(), Box<dyn std::error::Error>> {
         more
     });
     let stop = match result {
-        Ok(_) => "end of recording".to_owned(),
+        Ok(_)
+            if args
+                .seconds
+                .is_some_and(|s| start.elapsed().as_secs_f64() >= s) =>
+        {
+            "time limit".to_owned()
+        }
+        // As a live writer would, keep serving the last cut until signalled (or
+        // --seconds), so that late readers still get the scene.
+        Ok(_) => {
+            println!(
+                "{}",
+                serde_json::json!({"event": "end", "cuts_played": played, "generation": player.generation()})
+            );
+            serve_last_cut(&player, start, args.seconds)
+        }
         Err(ReplayError::Interrupted(e)) => e.to_string(),
         Err(e) => return Err(e.into()),
     };
@@ -98,4 +114,25 @@ pub fn run(args: &ReplayArgs<'_>) -> Result<(), Box<dyn std::error::Error>> {
             "interval_error_ms_max": pct(&interval_error, 1.0)})
     );
     Ok(())
+}
+
+/// Keeps the last cut published until SIGINT/SIGTERM or until `seconds` after `start`;
+/// the reason it stopped.
+fn serve_last_cut(
+    player: &RecordingPlayer,
+    start: std::time::Instant,
+    seconds: Option<f64>,
+) -> String {
+    loop {
+        let left = seconds.map_or(1.0, |s| (s - start.elapsed().as_secs_f64()).min(1.0));
+        if left <= 0.0 {
+            return "time limit".to_owned();
+        }
+        if let Err(e) = player
+            .publisher()
+            .wait(std::time::Duration::from_secs_f64(left))
+        {
+            return e.to_string();
+        }
+    }
 }

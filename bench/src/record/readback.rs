@@ -151,10 +151,10 @@ pub fn measure(
         .saturating_sub((replay_seconds * 1e9) as u64);
     let from_cut = rec.cut_at_time(start_ns).unwrap_or(0);
     let after_first = (cuts[from_cut].writer_unix_ns - cuts[0].writer_unix_ns) as f64 / 1e9;
-    let replay_default = replay(path, after_first, false)?;
+    let replay_default = replay(path, after_first, replay_seconds, false)?;
     // With real-time priority (root only): how much of the error is waiting for a CPU
     // that other processes hold.
-    let replay_realtime = replay(path, after_first, true)?;
+    let replay_realtime = replay(path, after_first, replay_seconds, true)?;
 
     Ok(json!({
         "cuts": cuts.len(), "cuts_skipped_by_the_recorder": missed,
@@ -175,12 +175,13 @@ pub fn measure(
 }
 
 /// Replays the recording at `path` from `after_first` seconds after its first cut to
-/// its end at 1x with `ygg serve --recording` (under `chrt -f 10` when `realtime`), and
+/// its end (about `replay_seconds`) at 1x with `ygg serve --recording` (under `chrt -f 10` when `realtime`), and
 /// reports how far each interval between two cuts strayed from the recorded one (the
 /// player's own measurement, its summary line).
 fn replay(
     path: &Path,
     after_first: f64,
+    replay_seconds: f64,
     realtime: bool,
 ) -> Result<Value, Box<dyn std::error::Error>> {
     let scene = TestScene::for_run("bench-replay");
@@ -204,15 +205,23 @@ fn replay(
         c.args(args);
         c
     };
-    let out = scene.configure(&mut command).output()?;
-    if !out.status.success() {
-        return Ok(json!({"error": String::from_utf8_lossy(&out.stderr).trim().to_owned()}));
+    scene.configure(&mut command);
+    let watchdog =
+        ygg_testkit::Watchdog::new(Duration::from_secs_f64(replay_seconds * 2.0 + 120.0));
+    let mut player = ygg_testkit::Proc::spawn(command, "replay", &watchdog);
+    // The player keeps serving the last cut after it: stop it once it says so.
+    player.expect_line(Duration::from_secs_f64(replay_seconds * 2.0 + 60.0), |l| {
+        l.contains("\"event\":\"end\"")
+    });
+    player.signal(rustix::process::Signal::INT);
+    if !player.wait_exit(Duration::from_secs(30)).success() {
+        return Ok(json!({"error": player.stderr().join("\n")}));
     }
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let summary: Value = stdout
-        .lines()
+    let summary: Value = player
+        .stdout()
+        .iter()
         .rfind(|l| l.contains("\"event\":\"summary\""))
-        .map(serde_json::from_str)
+        .map(|l| serde_json::from_str(l))
         .transpose()?
         .ok_or("the replay printed no summary")?;
     Ok(json!({"cuts": summary["cuts_played"], "realtime": realtime,

@@ -88,6 +88,8 @@ struct OpenFile {
     end: u64,
     /// When the file was created (recorder clock).
     created_unix_ns: u64,
+    /// When its last cut was appended (recorder clock).
+    last_cut_unix_ns: u64,
     /// The last cut's segments in this file: `(session, entry)` ascending by segment id.
     last_cut: Vec<(u64, CutEntry)>,
     /// Cuts since the last checkpoint of this file (`None` before the first cut).
@@ -202,6 +204,7 @@ impl RecordingWriter {
             }
         }
         report.bytes_written = file.end - start;
+        file.last_cut_unix_ns = now;
         report.files_dropped = self.enforce_bounds(now)?;
         Ok(report)
     }
@@ -255,6 +258,7 @@ impl RecordingWriter {
             file,
             end: FIRST_RECORD_AT as u64,
             created_unix_ns: now,
+            last_cut_unix_ns: now,
             last_cut: Vec::new(),
             since_checkpoint: None,
         })
@@ -266,7 +270,7 @@ impl RecordingWriter {
             self.closed.push_back(ClosedFile {
                 path: f.path,
                 bytes: f.end,
-                last_cut_unix_ns: unix_ns(),
+                last_cut_unix_ns: f.last_cut_unix_ns,
             });
         }
         Ok(())
