@@ -3,6 +3,7 @@ the changed layers, queries made visible, and, in headless Chromium (Debian's ch
 driven by Playwright), a live scene shown by `ygg view` and an update appearing."""
 import json
 import os
+import re
 import subprocess
 import sys
 
@@ -10,13 +11,13 @@ import numpy as np
 import pytest
 
 import yggdrasil
-from conftest import binary
+from conftest import REPO, binary
 
 pytest.importorskip("viser", reason="the viewer extra: pip install 'yggdrasil[view]'")
 from yggdrasil.view import browser  # noqa: E402
 from yggdrasil.view.drawing import SceneDrawing  # noqa: E402
 from yggdrasil.view.queries import parse_query, query_shape  # noqa: E402
-from yggdrasil.view.sources import Timeline  # noqa: E402
+from yggdrasil.view.sources import Timeline, load_file  # noqa: E402
 from yggdrasil.view.style import Style, label_color, parse_heights, role_of  # noqa: E402
 
 RED, GREEN = label_color("3"), label_color("2")
@@ -116,6 +117,23 @@ def test_view_reports_a_missing_file_and_a_bad_height(tmp_path):
     assert run.returncode == 2 and "'high' is not a number" in run.stderr
 
 
+def test_readme_viewer_example_runs():
+    text = (REPO / "README.md").read_text()
+    section = text.split("## See the scene", 1)[1].split("\n## ", 1)[0]
+    blocks = re.findall(r"```python\n(.*?)```", section, re.S)
+    assert blocks, "README: no python block in the viewer's section"
+    exec(compile(blocks[0], "README.md", "exec"), {})
+
+
+def test_a_spark_dsg_file_is_imported_in_a_layout(small_office):
+    loaded = load_file(str(small_office / "office.sparkdsg"), "mint")
+    assert loaded.scene.node_count > 0 and "ROOMS" in loaded.scene.layers
+    assert loaded.mesh is None  # the generated office's mesh has no colors: drawn in label colors
+    drawing = SceneDrawing(Style())
+    drawing.update(loaded.scene)
+    assert drawing.node_count == loaded.scene.node_count
+
+
 # ------------------------------------------------------------------ in the browser
 needs_browser = pytest.mark.skipif(
     browser.chromium_path() is None and not os.environ.get("CI"),
@@ -135,9 +153,8 @@ def start_view(procs, *args):
     pytest.fail(f"ygg view exited: {p.p.stderr.read()}")
 
 
-def canvas(png):
-    """The 3D view's region of a 1280x800 screenshot: left of the panel."""
-    return (0, 160, 900, 800)
+# The 3D view's region of a 1280x800 screenshot: left of the panel, below the notice.
+CANVAS = (0, 160, 900, 800)
 
 
 @needs_browser
@@ -149,17 +166,23 @@ def test_a_live_scene_is_shown_in_chromium_and_an_update_appears(scene_name, pro
             generation, layers, nodes = page.status()
             scene = graph.snapshot()
             assert (layers, nodes) == (len(scene.layers), scene.node_count)
-            page.screenshot(str(tmp_path / "before.png"))
-            red = browser.color_pixels(str(tmp_path / "before.png"), RED, region=canvas(None))
-            green = browser.color_pixels(str(tmp_path / "before.png"), GREEN, region=canvas(None))
-            assert len(red) > 20 and len(green) > 40, (len(red), len(green))
+            before, after = str(tmp_path / "before.png"), str(tmp_path / "after.png")
+
+            def pixels(path, color):
+                return browser.color_pixels(path, color, region=CANVAS)
+
+            # viser fades new nodes in: screenshots until the labels' colors are drawn.
+            assert page.screenshot_until(before, lambda p: len(pixels(p, RED)) > 20 and len(pixels(p, GREEN)) > 40)
+            red = pixels(before, RED)
             graph.set_geometry(MOVING, [[8.0, 0.0, 0.0]])  # 7 m to the right (+x)
             writer.publish()
             page.wait_generation(writer.generation)
-            page.screenshot(str(tmp_path / "after.png"))
-            moved = browser.color_pixels(str(tmp_path / "after.png"), RED, region=canvas(None))
-            assert len(moved) > 20
-            assert moved[:, 0].mean() > red[:, 0].mean() + 100, (red.mean(axis=0), moved.mean(axis=0))
+
+            def moved_right(path):
+                now = pixels(path, RED)
+                return len(now) > 20 and now[:, 0].mean() > red[:, 0].mean() + 100
+
+            assert page.screenshot_until(after, moved_right), (red.mean(axis=0), pixels(after, RED).mean(axis=0))
         view.stop()
         assert view.p.returncode == 0, view.p.stderr.read()
 
@@ -173,10 +196,14 @@ def test_a_query_is_drawn_its_answer_highlighted(procs, tmp_path):
     with browser.open_viewer(url) as page:
         assert page.status()[2] == 7
         page.page.get_by_text("1 objects").wait_for()
-        page.screenshot(str(tmp_path / "query.png"))
-    gold = browser.color_pixels(str(tmp_path / "query.png"), (255, 215, 0), region=canvas(None))
-    ring = browser.color_pixels(str(tmp_path / "query.png"), (230, 0, 60), region=canvas(None))
-    assert len(gold) > 20 and len(ring) > 20, (len(gold), len(ring))
+        shot = str(tmp_path / "query.png")
+
+        def drawn(path):
+            gold = browser.color_pixels(path, (255, 215, 0), region=CANVAS)
+            ring = browser.color_pixels(path, (230, 0, 60), region=CANVAS)
+            return len(gold) > 20 and len(ring) > 20
+
+        assert page.screenshot_until(shot, drawn), "no highlight or ball in the screenshot"
     view.stop()
     assert {"event": "query", "op": "objects_within", "ids": [10], "generation": 0} in events
 

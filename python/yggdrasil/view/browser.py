@@ -8,8 +8,9 @@ import os
 import re
 import shutil
 import tempfile
+import time
 from contextlib import contextmanager
-from typing import Dict, Iterator, Optional, Tuple
+from typing import Callable, Dict, Iterator, Optional, Tuple
 
 #: Chromium's flags on a machine without a GPU or a network (and as root).
 CHROMIUM_ARGS = [
@@ -63,6 +64,18 @@ class ViewerPage:
         """Saves a PNG of the page, after two frames have been drawn."""
         self.page.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
         self.page.screenshot(path=path)
+
+    def screenshot_until(self, path: str, shows: Callable[[str], bool], timeout_s: float = 30.0) -> bool:
+        """Takes screenshots to ``path``, one per drawn frame, until ``shows(path)`` is
+        true (viser fades new scene nodes in over a few frames) or ``timeout_s`` passes;
+        returns whether it became true."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            self.screenshot(path)
+            if shows(path):
+                return True
+            if time.monotonic() > deadline:
+                return False
 
 
 @contextmanager

@@ -173,16 +173,18 @@ class SceneViewer:
         else:
             self._drop(name, "nodes")
         if len(d.edges):
-            width = 0.06 if d.role == "agents" else 0.02
+            width = 4.0 if d.role == "agents" else 1.5
             self._put(name, "edges", scene.add_line_segments(
                 f"{base}/edges", d.edges, ROLE_COLORS_EDGE.get(d.role, (60, 60, 60)), thickness=width,
+                thickness_units="screen",
                 visible=self._visible(d.role, "edges"),
             ))
         else:
             self._drop(name, "edges")
         if len(d.boxes):
             self._put(name, "boxes", scene.add_line_segments(
-                f"{base}/boxes", d.boxes, np.repeat(d.box_colors[:, None, :], 2, axis=1), thickness=0.02,
+                f"{base}/boxes", d.boxes, np.repeat(d.box_colors[:, None, :], 2, axis=1), thickness=1.5,
+                thickness_units="screen",
                 visible=self._visible(d.role, "boxes"),
             ))
         else:
@@ -202,7 +204,7 @@ class SceneViewer:
             self._drop(name, "nesting")
             return
         self._put(name, "nesting", self.server.scene.add_line_segments(
-            f"/{d.role}/{_safe(name)}/nesting", segs, (170, 170, 170), thickness=0.01,
+            f"/{d.role}/{_safe(name)}/nesting", segs, (170, 170, 170), thickness=1.0, thickness_units="screen",
             visible=self._visible(d.role, "nesting"),
         ))
 
@@ -300,7 +302,7 @@ class SceneViewer:
         scene_api = self.server.scene
         if len(drawn.shape):
             self._put("<query>", "query-shape", scene_api.add_line_segments(
-                "/query/shape", drawn.shape, QUERY_SHAPE, thickness=0.04))
+                "/query/shape", drawn.shape, QUERY_SHAPE, thickness=3.0, thickness_units="screen"))
         else:
             self._drop("<query>", "query-shape")
         if len(positions):
@@ -311,7 +313,7 @@ class SceneViewer:
         boxes = self.drawing.boxes_of(drawn.ids)
         if len(boxes):
             self._put("<query>", "query-boxes", scene_api.add_line_segments(
-                "/query/boxes", boxes, HIGHLIGHT, thickness=0.05))
+                "/query/boxes", boxes, HIGHLIGHT, thickness=3.0, thickness_units="screen"))
         else:
             self._drop("<query>", "query-boxes")
         shown = ", ".join(str(i) for i in drawn.ids[:20]) + (" ..." if len(drawn.ids) > 20 else "")
