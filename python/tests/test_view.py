@@ -109,6 +109,23 @@ def test_a_timeline_of_scenes_redraws_what_differs_between_its_steps():
     assert drawing.layers["OBJECTS"].positions[1].tolist() == [1.0, 0.0, 0.0]
 
 
+def test_a_timeline_of_cuts_loads_each_cut_by_its_generation():
+    g = small_graph()
+    scenes = {5: g.snapshot()}
+    g.set_geometry(MOVING, [[8.0, 0.0, 0.0]])
+    scenes[9] = g.snapshot()
+    asked = []
+
+    def at(generation):
+        asked.append(generation)
+        return scenes[generation]
+
+    timeline = Timeline.of_cuts([9, 5], [20.5, 10.25], at)
+    assert [e.time_ns for e in timeline.entries] == [10_250_000_000, 20_500_000_000]
+    assert timeline.scene(1) is scenes[9] and timeline.scene(0) is scenes[5] and asked == [9, 5]
+    assert timeline.entries[0].label == "generation 5 at 10.250 s"
+
+
 def test_view_reports_a_missing_file_and_a_bad_height(tmp_path):
     ygg = binary("ygg")
     run = subprocess.run([ygg, "view", str(tmp_path / "none.ygg")], capture_output=True, text=True, timeout=60)

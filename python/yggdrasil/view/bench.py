@@ -129,7 +129,7 @@ def pct(xs, q):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="bench/results/viewer.md")
-    ap.add_argument("--updates", type=int, default=60, help="moves timed for the update latency")
+    ap.add_argument("--updates", type=int, default=40, help="moves timed per latency row")
     ap.add_argument("--ticks", type=int, default=600, help="ticks per phase of the paired publish() run")
     ap.add_argument("--phases", type=int, default=3, help="pairs of phases (without, with)")
     ap.add_argument("--opens", type=int, default=5, help="fresh pages timed for the full office")
@@ -152,23 +152,30 @@ def main(argv=None) -> int:
         viewer = Viewer("--scene", name)
         opens = []
         for _ in range(args.opens):
-            t0 = time.time_ns()
-            with browser.open_viewer(viewer.url) as page:
+            with browser.open_viewer(None) as page:
+                t0 = time.time_ns()
+                page.goto(viewer.url)
                 _, layers, nodes = page.status()
                 page.page.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
                 opens.append((time.time_ns() - t0) / 1e6)
         log(f"full office shown after the page opens: {opens} ms ({layers} layers, {nodes} nodes)")
-        latency = []
+        latency = {"mesh shown": [], "mesh hidden": []}
         with browser.open_viewer(viewer.url) as page:
             page.status()
-            for k in range(args.updates + 3):
-                t0, generation = (int(x) for x in writer.command(f"move {k + 1}").split())
-                shown = page.wait_generation(generation)
-                if k >= 3:
-                    latency.append((shown - t0) / 1e6)
+            page.dismiss_notices()
             page.screenshot(str(out.with_name("viewer_office.png")))
+            k = 0
+            for mode, samples in latency.items():
+                if mode == "mesh hidden":  # the panel's toggle: the page stops drawing the 386k points
+                    page.page.get_by_text("mesh", exact=True).last.click()
+                for i in range(args.updates + 3):
+                    k += 1
+                    t0, generation = (int(x) for x in writer.command(f"move {k}").split())
+                    shown = page.wait_generation(generation)
+                    if i >= 3:
+                        samples.append((shown - t0) / 1e6)
+                log(f"update latency, {mode}: p50 {statistics.median(samples):.1f} ms")
         viewer.close()
-        log(f"update latency p50 {statistics.median(latency):.1f} ms")
 
         # ---- 2: publish() per tick, paired phases without and with the viewer
         phases = {"without": [], "with": []}
@@ -199,13 +206,18 @@ def main(argv=None) -> int:
         with browser.open_viewer(viewer.url) as page:
             page.status()
             page.page.get_by_text("objects:").first.wait_for()
-            page.screenshot(str(out.with_name("viewer_query.png")))
+            page.dismiss_notices()
+            gold = (255, 215, 0)
+            page.screenshot_until(str(out.with_name("viewer_query.png")),
+                                  lambda p: len(browser.color_pixels(p, gold)) > 50)
         viewer.close()
 
     ratio = [w / wo for w, wo in zip(phases["with"], phases["without"])]
     results.update({
-        "update_latency_ms": {"p50": statistics.median(latency), "p95": pct(latency, 95), "max": max(latency),
-                              "samples": len(latency)},
+        "update_latency_ms": {
+            mode: {"p50": statistics.median(x), "p95": pct(x, 95), "max": max(x), "samples": len(x)}
+            for mode, x in latency.items()
+        },
         "full_office_shown_ms": {"median": statistics.median(opens), "all": opens, "layers": layers, "nodes": nodes},
         "publish_us_median": phases,
         "publish_ratio_with_over_without": ratio,
@@ -235,9 +247,12 @@ def write_report(out: pathlib.Path, r: dict, args) -> None:
         "",
         "| target | measured | target | verdict |",
         "|---|---|---|---|",
-        f"| an update visible in the browser after `publish()` (office, one object's mesh moved; "
-        f"{lat['samples']} updates) | p50 {lat['p50']:.1f} ms, p95 {lat['p95']:.1f} ms, max {lat['max']:.1f} ms "
-        f"| ≤ 100 ms | {verdict(lat['p50'] <= 100)} |",
+        *(
+            f"| an update visible in the browser after `publish()` (office, one object's mesh moved; "
+            f"{x['samples']} updates; {mode}) | p50 {x['p50']:.1f} ms, p95 {x['p95']:.1f} ms, max {x['max']:.1f} ms "
+            f"| ≤ 100 ms | {verdict(x['p50'] <= 100)} |"
+            for mode, x in lat.items()
+        ),
         f"| the writer's `publish()` per tick with the viewer attached / without (median of the "
         f"{len(pub['with'])} pairs' ratios of medians, {args.ticks} ticks at 30 Hz per phase) | "
         f"{ratio:.3f} ({', '.join(f'{w:.0f}/{wo:.0f} µs' for w, wo in zip(pub['with'], pub['without']))}) "
@@ -253,12 +268,14 @@ def write_report(out: pathlib.Path, r: dict, args) -> None:
         "From the writer's wall clock just before `publish()` to the page's wall clock (`performance.timeOrigin + "
         "performance.now()`) when its status line first names that generation, seen by a `MutationObserver` "
         "(`yggdrasil/view/browser.py`). The viewer sends the changed layers before that line over the same "
-        "websocket, so the page holds them by then; drawing them is the next animation frame (~16 ms more).",
+        "websocket, so the page holds them by then; drawing them is the next animation frame. Measured with "
+        "the mesh shown, and with the mesh hidden by the panel's toggle (the page then stops drawing its "
+        "386k points: what a frame costs in software WebGL is the difference).",
         "- **publish() per tick**: the same writer process runs the same stream (an object's mesh and the "
         "newest agent pose moved per tick, 30 Hz) in alternating phases without and with the viewer (its process "
         "following the scene and a Chromium page open), medians per phase.",
-        "- **full office shown**: a fresh Chromium page per run, from `goto` to the status line naming "
-        "every node (sent after every layer) plus two animation frames.",
+        "- **full office shown**: a fresh Chromium page per run (browser already started), from `goto` to "
+        "the status line naming every node (sent after every layer) plus two animation frames.",
         "",
         f"Screenshots: the office live ([viewer_office.png](viewer_office.png)) and the office with a "
         f"`visible_objects` query from the newest pose drawn ([viewer_query.png](viewer_query.png)).",

@@ -43,6 +43,10 @@ class ViewerPage:
     def __init__(self, page) -> None:
         self.page = page
 
+    def goto(self, url: str) -> None:
+        """Loads the viewer's page (returns once the document has loaded)."""
+        self.page.goto(url)
+
     def status(self, timeout_ms: float = 30_000) -> Tuple[int, int, int]:
         """Waits for the status line and returns ``(generation, layers, nodes)``."""
         self.page.wait_for_function("/generation \\d+ · \\d+ layers/.test(document.body.innerText)", timeout=timeout_ms)
@@ -59,6 +63,12 @@ class ViewerPage:
         shown: Dict[str, float] = self.page.evaluate("window.__yggShown")
         first = min(t for g, t in shown.items() if int(g) >= generation)
         return first * 1e6
+
+    def dismiss_notices(self) -> None:
+        """Closes the notices shown over the view (viser's "software WebGL" warning)."""
+        buttons = self.page.locator(".mantine-Notification-closeButton")
+        for _ in range(buttons.count()):
+            buttons.first.click()
 
     def screenshot(self, path: str) -> None:
         """Saves a PNG of the page, after two frames have been drawn."""
@@ -79,8 +89,9 @@ class ViewerPage:
 
 
 @contextmanager
-def open_viewer(url: str, width: int = 1280, height: int = 800) -> Iterator[ViewerPage]:
-    """Opens ``url`` in headless Chromium with a fresh profile; closes both after."""
+def open_viewer(url: Optional[str], width: int = 1280, height: int = 800) -> Iterator[ViewerPage]:
+    """Opens ``url`` in headless Chromium with a fresh profile (a blank page if ``None``:
+    call ``ViewerPage.goto``); closes both after."""
     from playwright.sync_api import sync_playwright
 
     exe = chromium_path()
@@ -96,8 +107,10 @@ def open_viewer(url: str, width: int = 1280, height: int = 800) -> Iterator[View
             try:
                 page = context.new_page()
                 page.add_init_script(_HOOK)
-                page.goto(url)
-                yield ViewerPage(page)
+                viewer_page = ViewerPage(page)
+                if url is not None:
+                    viewer_page.goto(url)
+                yield viewer_page
             finally:
                 context.close()
     finally:

@@ -2,8 +2,8 @@
 timeline of scenes to scrub, or a live scene followed through a ``Reader``.
 
 A ``Timeline`` is a list of ``TimelineEntry(time_ns, label, load)``: anything that yields
-scenes in time order plugs in (a list of ``.ygg`` files here; a recording's cuts, each
-loaded by ``Recording.at(generation=...)``, the same way)."""
+scenes in time order plugs in (``of_files``: ``.ygg`` files; ``of_scenes``: snapshots;
+``of_cuts``: a recording's cuts, each loaded by its ``at(generation=...)``)."""
 from __future__ import annotations
 
 import os
@@ -96,6 +96,19 @@ class Timeline:
         return cls(
             [TimelineEntry(t, f"{i}: generation {s.generation}", (lambda s=s: s)) for i, (s, t) in enumerate(zip(scenes, times))]
         )
+
+    @classmethod
+    def of_cuts(cls, generations: Sequence[int], times_s: Sequence[float], at: Callable[..., object]) -> "Timeline":
+        """A timeline over the cuts of a recorded scene: cut ``i`` is generation
+        ``generations[i]`` at ``times_s[i]`` (seconds since the epoch), loaded by
+        ``at(generation=g)`` when the slider reaches it (a recording's ``cuts["generation"]``,
+        ``cuts["time"]`` and ``at``)."""
+        entries = [
+            TimelineEntry(int(round(float(t) * 1e9)), f"generation {int(g)} at {float(t):.3f} s",
+                          (lambda g=int(g): at(generation=g)))
+            for g, t in zip(generations, times_s)
+        ]
+        return cls(entries)
 
     @classmethod
     def of_files(cls, paths: Sequence[str], layout: str = "mint") -> "Timeline":

@@ -34,6 +34,19 @@ ROLE_COLORS: Dict[str, Tuple[int, int, int]] = {
     "buildings": (90, 90, 90),
 }
 
+#: A node's drawn diameter per role, metres (objects and rooms stand out, the many places
+#: stay small).
+ROLE_NODE_SIZES: Dict[str, float] = {
+    "mesh": 0.1,
+    "objects": 0.4,
+    "agents": 0.15,
+    "groups": 0.25,
+    "places": 0.12,
+    "other": 0.2,
+    "rooms": 0.7,
+    "buildings": 0.9,
+}
+
 # 20 well-separated colors (the "tab20" order), indexed by semantic label.
 _PALETTE = np.array(
     [
@@ -85,8 +98,13 @@ class Style:
 
     layer_step: float = 4.0
     heights: Mapping[str, float] = field(default_factory=dict)
-    node_size: float = 0.25
+    node_scale: float = 1.0
+    """Multiplies every role's node size (``ROLE_NODE_SIZES``)."""
     mesh_point_size: float = 0.04
+
+    def node_size(self, role: str) -> float:
+        """The drawn diameter of a role's nodes, metres."""
+        return ROLE_NODE_SIZES.get(role, 0.2) * self.node_scale
 
     def height(self, role: str) -> float:
         """The lift of a role's layers, metres."""

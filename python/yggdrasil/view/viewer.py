@@ -165,7 +165,7 @@ class SceneViewer:
         base = f"/{d.role}/{_safe(name)}"
         if len(d.ids) and d.role != "mesh":
             handle = scene.add_point_cloud(
-                f"{base}/nodes", d.positions, d.colors, point_size=self.style.node_size, point_shape="circle",
+                f"{base}/nodes", d.positions, d.colors, point_size=self.style.node_size(d.role), point_shape="circle",
                 point_shading="flat",
                 precision="float32", visible=self._visible(d.role, "nodes"),
             )
@@ -204,7 +204,7 @@ class SceneViewer:
             self._drop(name, "nesting")
             return
         self._put(name, "nesting", self.server.scene.add_line_segments(
-            f"/{d.role}/{_safe(name)}/nesting", segs, (170, 170, 170), thickness=1.0, thickness_units="screen",
+            f"/{d.role}/{_safe(name)}/nesting", segs, (200, 200, 200), thickness=1.0, thickness_units="screen",
             visible=self._visible(d.role, "nesting"),
         ))
 
@@ -237,7 +237,7 @@ class SceneViewer:
         center = (lo + hi) / 2.0
         extent = float(max(hi[0] - lo[0], hi[1] - lo[1], 1.0))
         self.server.initial_camera.look_at = tuple(center)
-        self.server.initial_camera.position = (center[0], center[1] - 0.9 * extent, center[2] + 0.8 * extent)
+        self.server.initial_camera.position = (center[0], center[1] - 0.75 * extent, center[2] + 0.55 * extent)
         self._camera_set = True
 
     # ------------------------------------------------------------------ interaction
@@ -263,7 +263,8 @@ class SceneViewer:
             d = self.drawing.layers[node.layer]
             row = int(np.searchsorted(d.ids, np.uint64(node_id)))
             self.server.scene.add_point_cloud(
-                "/selected", d.positions[row:row + 1], SELECTED, point_size=self.style.node_size * 2.5, point_shape="circle",
+                "/selected", d.positions[row:row + 1], SELECTED, point_size=self.style.node_size(d.role) * 2.5,
+                point_shape="circle",
             )
             text = "\n".join(f"- **{k}**: `{json.dumps(v, default=str)}`" for k, v in details.items())
             self._details.content = text
@@ -307,7 +308,8 @@ class SceneViewer:
             self._drop("<query>", "query-shape")
         if len(positions):
             self._put("<query>", "query-ids", scene_api.add_point_cloud(
-                "/query/answer", positions, HIGHLIGHT, point_size=self.style.node_size * 2.0, point_shape="circle"))
+                "/query/answer", positions, HIGHLIGHT, point_size=self.style.node_size("objects") * 1.5,
+                point_shape="circle"))
         else:
             self._drop("<query>", "query-ids")
         boxes = self.drawing.boxes_of(drawn.ids)
