@@ -83,6 +83,10 @@ def test_the_office_is_drawn_whole():
     assert drawing.node_count == scene.node_count
     assert sum(len(d.mesh_points) for d in drawing.layers.values()) > 350_000
     assert "chair" in drawing.legend()
+    quarter = SceneDrawing(Style(mesh_stride=4))
+    quarter.update(scene)
+    shown = sum(len(d.mesh_points) for d in quarter.layers.values())
+    assert shown == sum(len(d.mesh_points[::4]) for d in drawing.layers.values())
 
 
 def test_a_query_line_is_checked_and_drawn():

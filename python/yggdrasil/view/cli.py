@@ -36,6 +36,8 @@ def _parser() -> argparse.ArgumentParser:
     ap.add_argument("--layer-step", type=float, default=4.0, help="metres between two layer levels (default 4)")
     ap.add_argument("--height", action="append", metavar="ROLE=METRES",
                     help=f"lift a role's layers to a height ({', '.join(ROLE_LEVELS)}); repeatable")
+    ap.add_argument("--mesh-stride", type=int, default=1, metavar="K",
+                    help="draw every K-th mesh point (default 1: all; for a browser without a GPU)")
     ap.add_argument("--max-rate", type=float, default=30.0, help="live updates shown per second at most (default 30)")
     ap.add_argument("--wait-for-writer", type=float, default=10.0, help="seconds to wait for the live scene's writer")
     ap.add_argument("--save", metavar="OUT.viser", help="on exit, write what was shown to a .viser recording "
@@ -61,7 +63,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         print("ygg view: give either --scene NAME or one or more files", file=sys.stderr)
         return 2
     try:
-        style = Style(layer_step=args.layer_step, heights=parse_heights(args.height))
+        if args.mesh_stride < 1:
+            raise ValueError(f"--mesh-stride {args.mesh_stride}: must be 1 or more")
+        style = Style(layer_step=args.layer_step, heights=parse_heights(args.height), mesh_stride=args.mesh_stride)
     except ValueError as e:
         print(f"ygg view: {e}", file=sys.stderr)
         return 2

@@ -47,7 +47,8 @@ class LayerDrawing:
     box_colors: np.ndarray
     """``(12 b, 3)`` colors of those segments (the node's color)."""
     mesh_points: np.ndarray
-    """``(m, 3)`` every point of the layer's nodes (mesh layers only), at their true height."""
+    """``(m, 3)`` the points of the layer's nodes (mesh layers only; every
+    ``Style.mesh_stride``-th), at their true height."""
     mesh_colors: np.ndarray
     """``(m, 3)`` their colors: the owning object's label color, else the role's gray."""
     placed: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
@@ -106,8 +107,9 @@ def draw_layer(scene, name: str, style: Style, object_colors: Dict[int, Color]) 
             owner = parents[row]
             col = object_colors.get(owner, ROLE_COLORS["mesh"]) if owner is not None else ROLE_COLORS["mesh"]
             colors[row] = col
-            mesh_pts.append(points)
-            mesh_cols.append(np.tile(np.array(col, dtype=np.uint8), (len(points), 1)))
+            shown_points = points[:: style.mesh_stride]
+            mesh_pts.append(shown_points)
+            mesh_cols.append(np.tile(np.array(col, dtype=np.uint8), (len(shown_points), 1)))
         box = node.aabb
         if box is None and boxes[row] is not None:
             b = boxes[row]

@@ -101,6 +101,11 @@ class Style:
     node_scale: float = 1.0
     """Multiplies every role's node size (``ROLE_NODE_SIZES``)."""
     mesh_point_size: float = 0.04
+    mesh_stride: int = 1
+    """Draw every ``mesh_stride``-th mesh point (1: all). A browser without a GPU renders
+    every point in software on each frame: on such a machine the full office's 386k
+    points cost most of a frame (``bench/results/viewer.md``); a stride of 4 draws a
+    quarter of them."""
 
     def node_size(self, role: str) -> float:
         """The drawn diameter of a role's nodes, metres."""

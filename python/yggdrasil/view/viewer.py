@@ -212,7 +212,8 @@ class SceneViewer:
         self._drop("<file>", "mesh")
         if self._file_mesh is not None:
             self._put("<file>", "mesh", self.server.scene.add_point_cloud(
-                "/mesh/file", self._file_mesh.points, self._file_mesh.colors,
+                "/mesh/file", self._file_mesh.points[:: self.style.mesh_stride],
+                self._file_mesh.colors[:: self.style.mesh_stride],
                 point_size=self.style.mesh_point_size, visible=self._visible("mesh", "mesh"),
             ))
 
