@@ -21,7 +21,7 @@ from .style import ROLE_COLORS, Style
 HIGHLIGHT = (255, 215, 0)
 SELECTED = (255, 0, 255)
 QUERY_SHAPE = (230, 0, 60)
-EDGE_KINDS = ("nodes", "edges", "nesting", "boxes", "mesh")
+PARTS = ("nodes", "edges", "nesting", "boxes", "mesh")
 # Intra-layer edges take their role's node color (the agent's trajectory red, thicker).
 ROLE_COLORS_EDGE = {role: ROLE_COLORS[role] for role in ("agents", "places", "rooms", "objects")}
 
@@ -59,11 +59,10 @@ class SceneViewer:
         self._file_mesh: Optional[ColoredMesh] = None
         gui = self.server.gui
         self._status = gui.add_markdown("waiting for the first scene")
-        self._timeline_folder = None
         with gui.add_folder("Layers"):
             self._roles_folder = gui.add_folder("Roles")
             with gui.add_folder("Parts"):
-                for kind in EDGE_KINDS:
+                for kind in PARTS:
                     box = gui.add_checkbox(kind, initial_value=True)
                     box.on_update(lambda _e: self._apply_visibility())
                     self._kind_on[kind] = box
@@ -72,7 +71,7 @@ class SceneViewer:
         with gui.add_folder("Query"):
             self._query_text = gui.add_text("query", initial_value="")
             run = gui.add_button("Run")
-            run.on_click(lambda _e: self.set_query(self._query_text.value or None))
+            run.on_click(lambda _e: self._run_typed_query())
             self._query_result = gui.add_markdown("")
         with gui.add_folder("Selected node"):
             self._details = gui.add_markdown("click a node")
@@ -96,7 +95,7 @@ class SceneViewer:
                 self._file_mesh = mesh
                 self._send_file_mesh()
             for name in update.removed:
-                for kind in EDGE_KINDS:
+                for kind in PARTS:
                     handle = self._handles.pop((name, kind), None)
                     if handle is not None:
                         handle.remove()
@@ -291,6 +290,12 @@ class SceneViewer:
             self._query_text.value = json.dumps(self._query)
             return self._draw_query()
 
+    def _run_typed_query(self) -> None:
+        try:
+            self.set_query(self._query_text.value or None)
+        except ValueError:
+            pass  # set_query wrote the error in the panel
+
     def _draw_query(self) -> Optional[QueryDrawing]:
         scene = self.drawing.scene
         if scene is None or self._query is None:
@@ -339,7 +344,6 @@ class SceneViewer:
             on_show(index)
 
         slider.on_update(moved)
-        self._timeline_slider = slider
 
     def stop(self) -> None:
         """Stops the server and lets go of the scene shown (a live snapshot holds the
