@@ -86,7 +86,8 @@ def test_the_office_is_drawn_whole():
     quarter = SceneDrawing(Style(mesh_stride=4))
     quarter.update(scene)
     shown = sum(len(d.mesh_points) for d in quarter.layers.values())
-    assert shown == sum(len(d.mesh_points[::4]) for d in drawing.layers.values())
+    mesh_nodes = [i for name in scene.layers if role_of(name) == "mesh" for i in scene.layer(name).nodes]
+    assert shown == sum(len(scene.node(i).points[::4]) for i in mesh_nodes)  # every 4th point of each node
 
 
 def test_a_query_line_is_checked_and_drawn():
