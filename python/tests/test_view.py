@@ -210,6 +210,26 @@ def test_a_live_scene_is_shown_in_chromium_and_an_update_appears(scene_name, pro
 
 
 @needs_browser
+def test_a_timeline_of_files_is_scrubbed_with_its_slider(procs, tmp_path):
+    g = small_graph()
+    g.save(tmp_path / "t0.ygg")
+    g.add_node(13, "OBJECTS")
+    g.set_geometry(13, [[5.0, 5.0, 0.0]])
+    g.save(tmp_path / "t1.ygg")
+    view, url, _ = start_view(procs, str(tmp_path / "t0.ygg"), str(tmp_path / "t1.ygg"))
+    with browser.open_viewer(url) as page:
+        assert page.status()[1:] == (3, 7)
+        slider = page.page.get_by_role("slider")
+        slider.focus()
+        page.page.keyboard.press("ArrowRight")  # one step later: t1.ygg
+        page.page.wait_for_function("/· 8 nodes/.test(document.body.innerText)")
+        page.page.keyboard.press("ArrowLeft")
+        page.page.wait_for_function("/· 7 nodes/.test(document.body.innerText)")
+    view.stop()
+    assert view.p.returncode == 0
+
+
+@needs_browser
 def test_a_query_is_drawn_its_answer_highlighted(procs, tmp_path):
     path = tmp_path / "small.ygg"
     small_graph().save(path)
