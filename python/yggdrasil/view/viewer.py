@@ -152,6 +152,29 @@ class SceneViewer:
         if old is not None and old is not handle and old.name != handle.name:
             old.remove()
 
+    def _cloud(self, name: str, kind: str, path: str, points: np.ndarray, colors, **props) -> None:
+        """Draws a point cloud: a changed cloud of the same name is updated in place (its
+        points and colors sent, the page's object kept), else a new one is added."""
+        colors = np.broadcast_to(np.asarray(colors, np.uint8), (len(points), 3))
+        handle = self._handles.get((name, kind))
+        if isinstance(handle, viser.PointCloudHandle) and handle.name == path:
+            handle.points = np.asarray(points, handle.points.dtype)
+            handle.colors = np.ascontiguousarray(colors)
+            return
+        self._put(name, kind, self.server.scene.add_point_cloud(path, points, np.ascontiguousarray(colors), **props))
+
+    def _lines(self, name: str, kind: str, path: str, segments: np.ndarray, colors, **props) -> None:
+        """Draws line segments, updated in place like ``_cloud``."""
+        colors = np.ascontiguousarray(np.broadcast_to(np.asarray(colors, np.uint8).reshape(-1, 1, 3)
+                                                      if np.ndim(colors) == 2 else np.asarray(colors, np.uint8),
+                                                      (len(segments), 2, 3)))
+        handle = self._handles.get((name, kind))
+        if isinstance(handle, viser.LineSegmentsHandle) and handle.name == path:
+            handle.points = np.asarray(segments, np.float32)
+            handle.colors = colors
+            return
+        self._put(name, kind, self.server.scene.add_line_segments(path, segments, colors, **props))
+
     def _drop(self, name: str, kind: str) -> None:
         handle = self._handles.pop((name, kind), None)
         if handle is not None:
@@ -160,39 +183,34 @@ class SceneViewer:
     def _send_layer(self, name: str) -> None:
         d = self.drawing.layers[name]
         self._ensure_role_toggle(d.role)
-        scene = self.server.scene
         base = f"/{d.role}/{_safe(name)}"
         if len(d.ids) and d.role != "mesh":
-            handle = scene.add_point_cloud(
-                f"{base}/nodes", d.positions, d.colors, point_size=self.style.node_size(d.role), point_shape="circle",
-                point_shading="flat",
-                precision="float32", visible=self._visible(d.role, "nodes"),
+            self._cloud(
+                name, "nodes", f"{base}/nodes", d.positions, d.colors, point_size=self.style.node_size(d.role),
+                point_shape="circle", point_shading="flat", precision="float32", visible=self._visible(d.role, "nodes"),
             )
-            self._put(name, "nodes", handle)
         else:
             self._drop(name, "nodes")
         if len(d.edges):
             width = 4.0 if d.role == "agents" else 1.5
-            self._put(name, "edges", scene.add_line_segments(
-                f"{base}/edges", d.edges, ROLE_COLORS_EDGE.get(d.role, (60, 60, 60)), thickness=width,
-                thickness_units="screen",
-                visible=self._visible(d.role, "edges"),
-            ))
+            self._lines(
+                name, "edges", f"{base}/edges", d.edges, ROLE_COLORS_EDGE.get(d.role, (60, 60, 60)), thickness=width,
+                thickness_units="screen", visible=self._visible(d.role, "edges"),
+            )
         else:
             self._drop(name, "edges")
         if len(d.boxes):
-            self._put(name, "boxes", scene.add_line_segments(
-                f"{base}/boxes", d.boxes, np.repeat(d.box_colors[:, None, :], 2, axis=1), thickness=1.5,
-                thickness_units="screen",
+            self._lines(
+                name, "boxes", f"{base}/boxes", d.boxes, d.box_colors, thickness=1.5, thickness_units="screen",
                 visible=self._visible(d.role, "boxes"),
-            ))
+            )
         else:
             self._drop(name, "boxes")
         if len(d.mesh_points) and self._file_mesh is None:
-            self._put(name, "mesh", scene.add_point_cloud(
-                f"{base}/mesh", d.mesh_points, d.mesh_colors, point_size=self.style.mesh_point_size,
+            self._cloud(
+                name, "mesh", f"{base}/mesh", d.mesh_points, d.mesh_colors, point_size=self.style.mesh_point_size,
                 visible=self._visible(d.role, "mesh"),
-            ))
+            )
         else:
             self._drop(name, "mesh")
 
@@ -202,10 +220,10 @@ class SceneViewer:
         if segs is None or not len(segs):
             self._drop(name, "nesting")
             return
-        self._put(name, "nesting", self.server.scene.add_line_segments(
-            f"/{d.role}/{_safe(name)}/nesting", segs, (200, 200, 200), thickness=1.0, thickness_units="screen",
-            visible=self._visible(d.role, "nesting"),
-        ))
+        self._lines(
+            name, "nesting", f"/{d.role}/{_safe(name)}/nesting", segs, (200, 200, 200), thickness=1.0,
+            thickness_units="screen", visible=self._visible(d.role, "nesting"),
+        )
 
     def _send_file_mesh(self) -> None:
         self._drop("<file>", "mesh")
