@@ -13,6 +13,7 @@
 //! | `ygg query` | JSON-line object queries on a `.ygg` file or a live scene | [`query`] |
 //! | `ygg watch` | follow a live scene: a line per validated snapshot, writer exits and restarts | [`watch`] |
 //! | `ygg bridge zmq` | follow a Spark-DSG ZeroMQ stream (Hydra) and publish what changes | [`bridge`] |
+//! | `ygg view` | a scene in the browser: live, a file, or a timeline of files (runs the Python module `yggdrasil.view`) | [`view`] |
 //!
 //! `ygg demo-role` (hidden) is one of the demo's reader processes; the demo starts it, as
 //! it starts `ygg serve`, from this same executable.
@@ -35,6 +36,7 @@ mod record;
 mod replay;
 mod serve;
 mod timeline;
+mod view;
 mod watch;
 
 use std::process::ExitCode;
@@ -95,6 +97,11 @@ enum Command {
     /// Bridge another system's scene-graph stream into a scene (`ygg bridge zmq`).
     #[command(subcommand)]
     Bridge(bridge::BridgeCommand),
+    /// Show a scene in the browser (served locally, the address printed): a live scene
+    /// (--scene NAME), a `.ygg` or Spark-DSG file, or several files as a timeline.
+    /// Runs `python3 -m yggdrasil.view` (the Python package's `view` extra);
+    /// `ygg view --help` lists its options.
+    View(view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -129,6 +136,9 @@ fn main() -> ExitCode {
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),
         Command::Bridge(command) => bridge::run(&command).map(|()| ExitCode::SUCCESS),
+        Command::View(args) => view::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(Into::into),
     };
     match result {
         Ok(code) => code,

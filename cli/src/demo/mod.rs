@@ -9,6 +9,7 @@ mod child;
 pub mod roles;
 mod scene;
 mod stats;
+mod viewer;
 
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use rustix::process::Signal;
@@ -19,6 +20,7 @@ use std::time::{Duration, Instant};
 
 use self::child::Child;
 use self::scene::DemoScene;
+use self::viewer::DemoViewer;
 
 /// Options of `ygg demo`.
 #[derive(clap::Args, Debug)]
@@ -45,6 +47,13 @@ pub struct DemoArgs {
     /// `publish_us_mean`, `updates_per_s`).
     #[arg(long)]
     pub json: Option<std::path::PathBuf>,
+    /// Also show the scene in the browser (`ygg view --scene`; needs the Python package
+    /// with its `view` extra), the page's address printed.
+    #[arg(long)]
+    pub view: bool,
+    /// The viewer's port, with --view.
+    #[arg(long, default_value_t = 8080)]
+    pub view_port: u16,
 }
 
 /// The reader roles (`ygg demo-role --role ...`), in the order `--readers` cycles.
@@ -212,6 +221,21 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     procs[0].poll();
+    let viewer = if args.view {
+        match DemoViewer::start(&scene, args.view_port) {
+            Ok((viewer, url)) => {
+                println!("viewer: {url}");
+                Some(viewer)
+            }
+            Err(why) => {
+                drop(procs);
+                scene.clean_up();
+                return Err(why);
+            }
+        }
+    } else {
+        None
+    };
     let start = Instant::now();
     for i in 0..args.readers {
         let role = ROLES[i % ROLES.len()];
@@ -249,6 +273,9 @@ pub fn run(args: &DemoArgs) -> Result<(), Box<dyn std::error::Error>> {
             }
             break;
         }
+    }
+    if let Some(viewer) = viewer {
+        viewer.stop();
     }
     for p in &procs {
         p.bar.finish();
