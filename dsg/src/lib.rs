@@ -70,6 +70,7 @@ mod progress;
 mod raw;
 mod report;
 mod symbol;
+mod update;
 
 pub mod layout;
 pub mod objects;
@@ -100,3 +101,5 @@ pub use self::progress::{ImportPhase, ImportProgress};
 pub use self::report::{DropClass, DroppedItems, ImportOptions, ImportReport, Imported};
 #[doc(inline)]
 pub use self::symbol::NodeSymbol;
+#[doc(inline)]
+pub use self::update::{UpdateError, UpdateReport};
