@@ -95,6 +95,7 @@ class Sender:
         self.writer, self.graph, self.mesh = writer, graph, mesh
         self.seq = 0
         self.changed, self.deleted_nodes, self.deleted_edges = set(), [], []
+        self.edges = set()
 
     def write(self, msg: DsgUpdate_) -> None:
         msg.sequence_number = self.seq
@@ -109,6 +110,7 @@ class Sender:
             with open(path, "wb") as f:
                 f.write(data)
         self.changed, self.deleted_nodes, self.deleted_edges = set(), [], []
+        self.edges = set()
         self.write(DsgUpdate_(stamp(), data, [], [], True))
 
     def delta(self, path):
@@ -129,7 +131,7 @@ class Sender:
         self.write(msg)
 
     def added_edges(self):
-        return getattr(self, "edges", set())
+        return self.edges
 
     def command(self, cmd: str, args) -> None:
         if cmd == "send":
@@ -157,9 +159,11 @@ class Sender:
             self.changed.add(int(args[0]))
             say("ok added")
         elif cmd == "remove":
-            self.graph.remove_node(int(args[0]))
-            self.changed.discard(int(args[0]))
-            self.deleted_nodes.append(int(args[0]))
+            node_id = int(args[0])
+            self.graph.remove_node(node_id)
+            self.changed.discard(node_id)
+            self.edges = {e for e in self.added_edges() if node_id not in e}
+            self.deleted_nodes.append(node_id)
             say("ok removed")
         elif cmd == "edge":
             a, b = int(args[0]), int(args[1])
@@ -171,7 +175,11 @@ class Sender:
         elif cmd == "unedge":
             a, b = int(args[0]), int(args[1])
             ok = self.graph.remove_edge(a, b)
-            if ok:
+            added = self.added_edges()
+            if ok and ((a, b) in added or (b, a) in added):
+                # Added since the last update: it is simply not sent.
+                self.edges = added - {(a, b), (b, a)}
+            elif ok:
                 self.deleted_edges += [a, b]
             say(f"ok unedge {ok}")
         elif cmd == "ids":
