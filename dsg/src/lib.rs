@@ -102,4 +102,4 @@ pub use self::report::{DropClass, DroppedItems, ImportOptions, ImportReport, Imp
 #[doc(inline)]
 pub use self::symbol::NodeSymbol;
 #[doc(inline)]
-pub use self::update::{UpdateError, UpdateReport};
+pub use self::update::{GraphUpdate, UpdateError, UpdateReport, update_between};

@@ -392,3 +392,149 @@ fn part_edge_list(part: &DsgGraph) -> Vec<(u64, u64, EdgeKind)> {
     );
     out
 }
+
+/// An incremental update as [`DsgGraph::apply_update`] takes it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GraphUpdate {
+    /// The nodes changed or added, the edges added and the nodes they join.
+    pub part: DsgGraph,
+    /// Nodes removed.
+    pub deleted_nodes: Vec<u64>,
+    /// Edges removed, as consecutive (source, target) pairs.
+    pub deleted_edges: Vec<u64>,
+}
+
+impl GraphUpdate {
+    /// Whether the update changes nothing.
+    pub fn is_empty(&self) -> bool {
+        self.part.nodes.is_empty()
+            && self.part.mesh.is_none()
+            && self.deleted_nodes.is_empty()
+            && self.deleted_edges.is_empty()
+    }
+}
+
+/// Every edge of a graph by unordered pair, with its kind.
+fn edge_map(g: &DsgGraph) -> FxHashMap<(u64, u64), (u64, u64, EdgeKind)> {
+    part_edge_list(g)
+        .into_iter()
+        .map(|(a, b, k)| (pair(a, b), (a, b, k)))
+        .collect()
+}
+
+fn same_kind(a: EdgeKind, b: EdgeKind) -> bool {
+    match (a, b) {
+        (EdgeKind::Intra(x), EdgeKind::Intra(y)) | (EdgeKind::Sibling(x), EdgeKind::Sibling(y)) => {
+            x.map(f64::to_bits) == y.map(f64::to_bits)
+        }
+        (EdgeKind::Parent, EdgeKind::Parent) => true,
+        _ => false,
+    }
+}
+
+/// The incremental update that takes `previous` to `next`: `apply_update` of it on
+/// `previous` gives `next`'s nodes, edges, mesh and labelspaces (new nodes at the end).
+/// The part holds each node that changed or is new, and each node an added edge joins.
+///
+/// # Examples
+/// ```
+/// use ygg_dsg::office::{generate, OfficeParams};
+/// let before = generate(OfficeParams { seed: 1, scale: 0.01 });
+/// let mut after = before.clone();
+/// after.nodes[3].position[2] += 0.5;
+/// let update = ygg_dsg::update_between(&before, &after);
+/// assert_eq!(update.part.nodes.len(), 1);
+/// let mut g = before.clone();
+/// g.apply_update(update.part, &update.deleted_nodes, &update.deleted_edges)?;
+/// assert_eq!(g, after);
+/// # Ok::<(), ygg_dsg::UpdateError>(())
+/// ```
+pub fn update_between(previous: &DsgGraph, next: &DsgGraph) -> GraphUpdate {
+    let before = previous.node_index();
+    let after = next.node_index();
+    let deleted_nodes: Vec<u64> = previous
+        .nodes
+        .iter()
+        .filter(|n| !after.contains_key(&n.id))
+        .map(|n| n.id)
+        .collect();
+    let (old_edges, new_edges) = (edge_map(previous), edge_map(next));
+    let mut deleted_edges = Vec::new();
+    for (p, &(a, b, kind)) in &old_edges {
+        let survives = after.contains_key(&a) && after.contains_key(&b);
+        let kept = new_edges
+            .get(p)
+            .is_some_and(|&(_, _, k)| same_kind(k, kind));
+        if survives && !kept {
+            deleted_edges.extend([a, b]);
+        }
+    }
+    let added: Vec<(u64, u64, EdgeKind)> = new_edges
+        .iter()
+        .filter(|(p, (_, _, k))| !old_edges.get(*p).is_some_and(|&(_, _, o)| same_kind(o, *k)))
+        .map(|(_, &e)| e)
+        .collect();
+    let mut in_part: FxHashSet<u64> = FxHashSet::default();
+    for n in &next.nodes {
+        let changed = before.get(&n.id).is_none_or(|&i| {
+            let old = &previous.nodes[i];
+            DsgNode {
+                parent: n.parent,
+                ..old.clone()
+            } != *n
+        });
+        if changed {
+            in_part.insert(n.id);
+        }
+    }
+    for &(a, b, _) in &added {
+        in_part.extend([a, b]);
+    }
+    let new_parent_edges: FxHashSet<(u64, u64)> = added
+        .iter()
+        .filter(|(_, _, k)| matches!(k, EdgeKind::Parent))
+        .map(|&(a, b, _)| (a, b))
+        .collect();
+    let mut part = DsgGraph {
+        source: next.source.clone(),
+        version: next.version,
+        layers: next.layers.clone(),
+        labelspaces: next.labelspaces.clone(),
+        mesh: (next.mesh != previous.mesh)
+            .then(|| next.mesh.clone())
+            .flatten(),
+        ..DsgGraph::default()
+    };
+    // Part nodes in `next`'s order; a node's parent only when that edge is new.
+    for n in next.nodes.iter().filter(|n| in_part.contains(&n.id)) {
+        let parent = n.parent.filter(|&p| new_parent_edges.contains(&(p, n.id)));
+        part.nodes.push(DsgNode {
+            parent,
+            ..n.clone()
+        });
+    }
+    for (a, b, kind) in added {
+        match kind {
+            EdgeKind::Intra(weight) => part.edges.push(DsgEdge {
+                source: a,
+                target: b,
+                weight,
+            }),
+            EdgeKind::Sibling(weight) => part.sibling_edges.push(DsgEdge {
+                source: a,
+                target: b,
+                weight,
+            }),
+            EdgeKind::Parent if next.nodes[after[&b]].parent == Some(a) => {}
+            EdgeKind::Parent => part.extra_parent_edges.push(DsgParentEdge {
+                parent: a,
+                child: b,
+            }),
+        }
+    }
+    GraphUpdate {
+        part,
+        deleted_nodes,
+        deleted_edges,
+    }
+}
