@@ -298,9 +298,4 @@ impl DsgUpdatePublisher {
             error: e.to_string(),
         })
     }
-
-    /// Subscriptions matched so far (ROS 2 nodes listening on the topic).
-    pub fn matched(&self) -> usize {
-        self.writer.get_matched_subscriptions().len()
-    }
 }

@@ -28,10 +28,15 @@ one command a line on stdin, one answer line each (`ok ...` or `error ...`):
   quit                 exit
 
 `listen` subscribes and, for each message, writes its layer_contents to
-OUT_DIR/<sequence_number>.bin and prints `got seq=S full=F bytes=B nodes=N edges=E`, where
-N and E are what spark_dsg 1.1.3 decoded (`nodes=error:<why>` when it could not).
+OUT_DIR/<sequence_number>.bin and the rest to OUT_DIR/<sequence_number>.json
+(full_update, deleted_nodes, deleted_edges), and prints
+`got seq=S full=F bytes=B deleted=D nodes=N edges=E`, where N and E are what spark_dsg
+1.1.3's `from_binary` decoded of layer_contents alone (`nodes=error:<why>` when it could
+not). (spark_dsg's `update_from_binary` drops every node a body does not hold, so it
+cannot apply an incremental update: the driver applies them.)
 """
 
+import json
 import os
 import sys
 import time
@@ -219,13 +224,23 @@ def listen(participant, topic, out_dir: str) -> int:
     while True:
         for msg in reader.take_iter(timeout=duration(seconds=3600)):
             data = bytes(msg.layer_contents)
-            with open(os.path.join(out_dir, f"{msg.sequence_number}.bin"), "wb") as f:
+            base = os.path.join(out_dir, str(msg.sequence_number))
+            with open(base + ".bin", "wb") as f:
                 f.write(data)
+            with open(base + ".json", "w") as f:
+                json.dump(
+                    {
+                        "full_update": bool(msg.full_update),
+                        "deleted_nodes": list(msg.deleted_nodes),
+                        "deleted_edges": list(msg.deleted_edges),
+                    },
+                    f,
+                )
             try:
                 g = dsg.DynamicSceneGraph.from_binary(data)
                 decoded = f"nodes={g.num_nodes()} edges={g.num_edges()}"
             except Exception as e:  # noqa: BLE001 - reported to the driver
-                decoded = f"nodes=error:{str(e).split()[0] if str(e) else 'error'}"
+                decoded = f"nodes=error:{type(e).__name__}"
             say(
                 f"got seq={msg.sequence_number} full={int(msg.full_update)} "
                 f"bytes={len(data)} deleted={len(msg.deleted_nodes)} {decoded}"

@@ -8,6 +8,10 @@
 //! brute force on the sender's data. A sequence gap and malformed messages never publish
 //! a graph; the next full update recovers.
 //!
+//! The other direction: `ygg export ros2` publishes the bridge's scene on a second topic;
+//! a Cyclone DDS subscriber receives it, spark_dsg decodes every message's body, and the
+//! full update then each incremental one applied give back the graph Hydra's side sent.
+//!
 //! RustDDS discovers peers by multicast only, on non-loopback interfaces: the bridge and the
 //! peer run in a network namespace the test creates (one end of a veth pair, multicast
 //! routed to it; `ygg_testkit::VethLink`) and removes. They need root and `ip`, as in CI;
@@ -15,6 +19,7 @@
 
 mod bridge_common;
 
+use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
@@ -22,6 +27,7 @@ use bridge_common::{
     LAYOUT, STEP, bridge_event, check_objects, command, expected, generations, root, snapshot_at,
 };
 use rustix::process::Signal;
+use ygg_dsg::{DsgGraph, DsgVersion};
 use ygg_reader::SceneReader;
 use ygg_testkit::fingerprint::layer_fingerprints;
 use ygg_testkit::{Input, Proc, TestScene, VethLink, Watchdog, binary, run, text};
@@ -266,6 +272,170 @@ fn bridge_follows_cyclone_dds_full_and_incremental_updates_in_sequence() {
     assert!(summary.contains("\"out_of_sequence\":2"), "{summary}");
     peer.send("quit").ok();
     peer.close_stdin();
+    scene.assert_no_leftovers(Duration::from_secs(5));
+}
+
+/// A graph as `to_dsg` gives it back from a Vanilla scene: every node's id, layer, kind,
+/// position, name, semantic label and parent, and every edge as an unordered pair (the
+/// mesh, its claims and edge weights are not sent: `ygg_dsg::layout::to_dsg`).
+fn sent_form(g: &DsgGraph) -> (Vec<String>, Vec<(u64, u64)>) {
+    let mut nodes: Vec<String> = g
+        .nodes
+        .iter()
+        .map(|n| {
+            format!(
+                "{} {} {:?} {:?} {:?} {:?} {:?}",
+                n.id, n.layer, n.kind, n.position, n.name, n.semantic_label, n.parent
+            )
+        })
+        .collect();
+    nodes.sort_unstable();
+    let mut edges: Vec<(u64, u64)> = g
+        .edges
+        .iter()
+        .chain(&g.sibling_edges)
+        .map(|e| (e.source.min(e.target), e.source.max(e.target)))
+        .collect();
+    edges.sort_unstable();
+    (nodes, edges)
+}
+
+fn decode(path: &Path) -> DsgGraph {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    ygg_dsg::parse_binary_body(&bytes, DsgVersion::V1_1_3, "received").expect("decodes")
+}
+
+#[test]
+fn export_ros2_sends_a_live_scene_that_cyclone_dds_and_spark_dsg_receive() {
+    let Some(host) = Host::create() else {
+        return;
+    };
+    binary("ygg");
+    let scene = TestScene::new("ros2x");
+    let watchdog = Watchdog::new(WATCHDOG);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (sent_dir, received) = (dir.path().join("sent"), dir.path().join("received"));
+    std::fs::create_dir_all(&sent_dir).expect("mkdir");
+    std::fs::create_dir_all(&received).expect("mkdir");
+    let fixture = root().join("dsg/tests/fixtures/office_tiny.json");
+    // Hydra (Cyclone DDS) -> `ygg bridge ros2` -> the scene -> `ygg export ros2` -> a
+    // ROS 2 subscriber (Cyclone DDS), on two topics.
+    let mut peer = host.peer(
+        &["send", DOMAIN, TOPIC, fixture.to_str().expect("UTF-8")],
+        &watchdog,
+    );
+    let listener = host.peer(
+        &[
+            "listen",
+            DOMAIN,
+            "/ygg/dsg",
+            received.to_str().expect("UTF-8"),
+        ],
+        &watchdog,
+    );
+    let bridge = host.ygg(
+        &scene,
+        &[
+            "bridge",
+            "ros2",
+            "--topic",
+            TOPIC,
+            "--domain-id",
+            DOMAIN,
+            "--scene",
+            &scene.name,
+            "--layout",
+            "vanilla",
+        ],
+        "bridge",
+        &watchdog,
+    );
+    bridge.expect_line(STEP, |l| l.contains("\"subscribed\""));
+    command(&mut peer, "matched 1");
+    let first = sent_dir.join("0.bin");
+    command(&mut peer, &format!("send {}", first.display()));
+    bridge.expect_line(STEP, |l| l.contains("\"ready\""));
+    let export = host.ygg(
+        &scene,
+        &[
+            "export",
+            "ros2",
+            "--scene",
+            &scene.name,
+            "--topic",
+            "/ygg/dsg",
+            "--domain-id",
+            DOMAIN,
+            "--full-every",
+            "3600",
+        ],
+        "export",
+        &watchdog,
+    );
+    export.expect_line(STEP, |l| l.contains("\"advertised\""));
+    // The first message is full: spark_dsg decodes it, to the graph Hydra sent.
+    let got = listener
+        .wait_line_after(0, STEP, |l| l.starts_with("got seq=0 "))
+        .map(|(_, l)| l)
+        .unwrap_or_else(|| panic!("nothing received: {}", export.describe()));
+    assert!(got.contains(" full=1 "), "{got}");
+    let spark = decode(&first);
+    assert!(
+        got.contains(&format!(" nodes={} ", spark.nodes.len())),
+        "{got}: spark_dsg decoded another node count"
+    );
+    let mut held = decode(&received.join("0.bin"));
+    assert_eq!(sent_form(&held), sent_form(&spark));
+
+    let objects: Vec<u64> = command(&mut peer, "ids 2")
+        .split_whitespace()
+        .skip(1)
+        .map(|w| w.parse().expect("id"))
+        .collect();
+    let new_object = objects.iter().max().unwrap() + 7;
+    for (k, line) in [
+        format!("move {} 0.5 0.25 0", objects[0]),
+        format!("add {new_object} 2 6.0 7.0 1.0"),
+        format!("remove {}", objects[1]),
+    ]
+    .iter()
+    .enumerate()
+    {
+        command(&mut peer, line);
+        let path = sent_dir.join(format!("{}.bin", k + 1));
+        let skip = bridge.stdout().len();
+        command(&mut peer, &format!("delta {}", path.display()));
+        bridge_event(&bridge, skip, "update");
+        // The exporter's next message: incremental, a Spark-DSG body of its own.
+        let seq = k + 1;
+        let got = listener.expect_line(STEP, |l| l.starts_with(&format!("got seq={seq} ")));
+        assert!(got.contains(" full=0 "), "{line}: {got}");
+        assert!(
+            !got.contains("nodes=error"),
+            "{line}: spark_dsg refused the part: {got}"
+        );
+        let meta: serde_json::Value = serde_json::from_slice(
+            &std::fs::read(received.join(format!("{seq}.json"))).expect("message"),
+        )
+        .expect("JSON");
+        let ids =
+            |key: &str| -> Vec<u64> { serde_json::from_value(meta[key].clone()).expect("ids") };
+        held.apply_update(
+            decode(&received.join(format!("{seq}.bin"))),
+            &ids("deleted_nodes"),
+            &ids("deleted_edges"),
+        )
+        .unwrap_or_else(|e| panic!("{line}: {e}"));
+        assert_eq!(sent_form(&held), sent_form(&decode(&path)), "{line}");
+    }
+
+    for mut p in [export, bridge] {
+        p.signal(Signal::TERM);
+        assert!(p.wait_exit(STEP).success(), "{}", p.describe());
+    }
+    peer.send("quit").ok();
+    peer.close_stdin();
+    drop(listener);
     scene.assert_no_leftovers(Duration::from_secs(5));
 }
 

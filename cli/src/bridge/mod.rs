@@ -34,6 +34,8 @@ mod zmq;
 
 use clap::Subcommand;
 
+pub use ros2::domain_id;
+
 /// The sources `ygg bridge` follows.
 #[derive(Subcommand, Debug)]
 pub enum BridgeCommand {
