@@ -80,7 +80,8 @@ pub mod replay;
 #[doc(inline)]
 pub use self::binary::{
     BodyStream, ChangedNodes, StreamStep, is_binary, parse_binary, parse_binary_body,
-    parse_binary_with, parse_binary_with_progress, to_binary_body, to_binary_bytes, write_binary,
+    parse_binary_with, parse_binary_with_progress, to_binary_body, to_binary_body_at,
+    to_binary_bytes, to_binary_bytes_at, write_binary,
 };
 #[doc(inline)]
 pub use self::error::DsgImportError;

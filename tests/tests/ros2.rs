@@ -439,6 +439,34 @@ fn export_ros2_sends_a_live_scene_that_cyclone_dds_and_spark_dsg_receive() {
     scene.assert_no_leftovers(Duration::from_secs(5));
 }
 
+/// The README's ROS 2 commands are ones `ygg` takes (each checked up to `--help`, which
+/// clap answers only after accepting every argument before it).
+#[test]
+fn readme_ros2_commands_are_accepted() {
+    let readme = std::fs::read_to_string(root().join("README.md")).expect("README.md");
+    let section = readme
+        .split("## ROS 2 (Hydra)")
+        .nth(1)
+        .and_then(|s| s.split("```sh").nth(1))
+        .and_then(|s| s.split("```").next())
+        .expect("a sh block in the README's ROS 2 section");
+    let commands: Vec<Vec<&str>> = section
+        .lines()
+        .filter_map(|l| l.split('#').next()?.trim().strip_prefix("ygg "))
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(commands.len(), 2, "{section}");
+    for args in commands {
+        let mut all: Vec<&dyn AsRef<std::ffi::OsStr>> = args
+            .iter()
+            .map(|a| a as &dyn AsRef<std::ffi::OsStr>)
+            .collect();
+        all.push(&"--help");
+        let out = run("ygg", &all);
+        assert!(out.status.success(), "ygg {args:?}: {}", text(&out.stderr));
+    }
+}
+
 #[test]
 fn bridge_ros2_refuses_bad_arguments_cleanly() {
     let cases: [(&[&str], &str); 3] = [

@@ -80,11 +80,11 @@ pub(super) struct Follower {
 }
 
 impl Follower {
-    /// A follower building `layout`; the first message is decoded in full. `source`
-    /// names the messages in errors (`zmq message`).
-    pub(super) fn new(layout: Layout, source: &str) -> Self {
+    /// A follower building `layout` from bodies encoded at `version`; the first message
+    /// is decoded in full. `source` names the messages in errors (`zmq message`).
+    pub(super) fn new(layout: Layout, source: &str, version: DsgVersion) -> Self {
         Self {
-            stream: BodyStream::new(DsgVersion::V1_1_3, source),
+            stream: BodyStream::new(version, source),
             layout,
         }
     }
@@ -332,7 +332,7 @@ mod tests {
             seed: 5,
             scale: 0.03,
         });
-        let mut follower = Follower::new(layout, "zmq message");
+        let mut follower = Follower::new(layout, "zmq message", DsgVersion::V1_1_3);
         let first = Bytes::from(to_binary_body(&g).expect("encode"));
         let mut live = follower.first(vec![first]).expect("first").expect("new");
         let mut paths = [0; 3];

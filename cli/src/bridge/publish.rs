@@ -35,6 +35,11 @@ pub struct PublishArgs {
     /// per-room layouts add layers per room); a lower bound makes readers attach faster.
     #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_SEGMENTS)]
     pub max_layers: usize,
+    /// The Spark-DSG version of the sender (its bodies carry no header and are read as
+    /// the sender's own version): 1.1.3 (the released spark_dsg), or 1.1.4 (its
+    /// `develop` branch, another `Place2dNodeAttributes` layout).
+    #[arg(long, default_value = "1.1.3")]
+    pub spark_dsg_version: ygg_dsg::DsgVersion,
 }
 
 /// A bridge's scene: created from the first good message, then brought to each next
@@ -66,7 +71,7 @@ impl<'a> ScenePublisher<'a> {
         Ok(Self {
             args,
             writer: None,
-            follower: Follower::new(args.layout, source),
+            follower: Follower::new(args.layout, source, args.spark_dsg_version),
             start: Instant::now(),
             received: 0,
             skipped: 0,
