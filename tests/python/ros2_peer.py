@@ -17,6 +17,7 @@ one command a line on stdin, one answer line each (`ok ...` or `error ...`):
                        edge since the last update, the nodes and edges removed; PATH gets
                        the whole graph (spark_dsg's to_binary), to compare with
   skip                 count a sequence number without sending it (a gap)
+  shift DX DY DZ       translate the whole graph (every node and mesh vertex; send it in full)
   garbage N            a full update whose layer_contents are N bytes of no graph
   move ID DX DY DZ     move node ID by the offset
   add ID LAYER X Y Z   add an object node ID to layer LAYER at X Y Z
@@ -187,6 +188,11 @@ class Sender:
             elif ok:
                 self.deleted_edges += [a, b]
             say(f"ok unedge {ok}")
+        elif cmd == "shift":
+            pose = np.eye(4)
+            pose[:3, 3] = [float(a) for a in args[:3]]
+            self.graph.transform(pose)
+            say("ok shifted")
         elif cmd == "ids":
             layer = self.graph.get_layer(int(args[0]))
             say("ok " + " ".join(str(n.id.value) for n in layer.nodes))
