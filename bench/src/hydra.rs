@@ -145,10 +145,17 @@ pub(crate) struct Sender {
 }
 
 impl Sender {
-    pub(crate) fn start(python: &str, graph: &Path) -> Result<Self, Box<dyn std::error::Error>> {
+    pub(crate) fn start(
+        python: &str,
+        graph: &Path,
+        mesh: bool,
+    ) -> Result<Self, Box<dyn std::error::Error>> {
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/python/dsg_sender.py");
         let mut command = Command::new(python);
-        command.arg(script).arg(graph).arg("--mesh");
+        command.arg(script).arg(graph);
+        if mesh {
+            command.arg("--mesh");
+        }
         let proc = Proc::start(command, "sender", Input::Lines)?;
         let (_, line) = proc
             .wait_line_after(0, STEP, |l| l.starts_with("port="))
@@ -366,7 +373,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
         .id;
     drop(office);
 
-    let mut sender = Sender::start(&args.python, &path)?;
+    let mut sender = Sender::start(&args.python, &path, true)?;
     let endpoint = format!("tcp://127.0.0.1:{}", sender.port);
     let ygg_bin = ygg_testkit::binary("ygg");
     let me = std::env::current_exe()?;

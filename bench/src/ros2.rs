@@ -46,6 +46,20 @@ pub struct Ros2Args {
     /// The Python interpreter with spark_dsg, pyzmq and cyclonedds installed.
     #[arg(long, default_value = "python3")]
     pub python: String,
+    /// Cyclone DDS's `Internal/Watermarks/WhcHigh` for the sender (bytes in flight
+    /// before the writer waits for acknowledgements), e.g. `500kB`; default: Cyclone's.
+    /// RustDDS leaves the socket's receive buffer at the system default (net.core.rmem_default,
+    /// 208 KiB here), so a sender that bursts a 31 MB message loses fragments and repairs
+    /// them heartbeat by heartbeat.
+    #[arg(long)]
+    pub cyclone_whc_high: Option<String>,
+    /// More of Cyclone DDS's `General` settings for the sender, as XML (e.g.
+    /// `<FragmentSize>8000B</FragmentSize>`); default: Cyclone's.
+    #[arg(long)]
+    pub cyclone_general: Option<String>,
+    /// Send the graph without its mesh (as hydra_ros does unless `serialize_dsg_mesh`).
+    #[arg(long)]
+    pub no_mesh: bool,
     /// Also write the markdown report to this file.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -161,12 +175,16 @@ pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     link.route_multicast(0)?;
     let dir = tempfile::tempdir()?;
     let config = dir.path().join("cyclonedds.xml");
+    let internal = args.cyclone_whc_high.as_ref().map_or(String::new(), |w| {
+        format!("<Internal><Watermarks><WhcHigh>{w}</WhcHigh></Watermarks></Internal>")
+    });
     std::fs::write(
         &config,
         format!(
             "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface \
-             name=\"{}\"/></Interfaces></General></Domain></CycloneDDS>",
-            link.interface(0)
+             name=\"{}\"/></Interfaces>{}</General>{internal}</Domain></CycloneDDS>",
+            link.interface(0),
+            args.cyclone_general.as_deref().unwrap_or_default()
         ),
     )?;
     let office = generate(OfficeParams {
@@ -234,7 +252,7 @@ pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     })?;
 
     // ZeroMQ: spark_dsg's DsgSender -> ygg bridge zmq, on loopback.
-    let mut zmq_sender = Sender::start(&args.python, &path)?;
+    let mut zmq_sender = Sender::start(&args.python, &path, !args.no_mesh)?;
     let endpoint = format!("tcp://127.0.0.1:{}", zmq_sender.port);
     let zmq_scene = TestScene::for_run("zmq");
     let zmq_cmd = zmq_scene.command_for(
@@ -296,14 +314,25 @@ pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     writeln!(md, "# ROS 2 bridge (`ygg-bench ros2`)\n")?;
     writeln!(
         md,
-        "The office (seed 7, scale {}, {nodes} nodes, with its mesh), layout {}, {} reader \
-         processes per bridge; medians of {} full messages and {} incremental ones. \
-         Machine: {} cores; load average before: {}.\n",
+        "The office (seed 7, scale {}, {nodes} nodes, {}), layout {}, {} reader \
+         processes per bridge; medians of {} full messages and {} incremental ones; Cyclone \
+         DDS WhcHigh: {}, General: {}. Machine: {} cores; load average before: {}.\n",
         args.scale,
+        if args.no_mesh {
+            "sent without its mesh"
+        } else {
+            "sent with its mesh"
+        },
         args.layout.name(),
         args.readers,
         args.messages,
         args.edits,
+        args.cyclone_whc_high
+            .as_deref()
+            .unwrap_or("Cyclone's default"),
+        args.cyclone_general
+            .as_deref()
+            .unwrap_or("Cyclone's defaults"),
         std::thread::available_parallelism().map_or(0, usize::from),
         load_before.trim()
     )?;
