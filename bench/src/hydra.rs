@@ -90,13 +90,13 @@ while True:
     print(json.dumps({"t_ns": t1, "update_s": (t1 - t0) / 1e9, "nodes": r._graph.num_nodes()}), flush=True)
 "#;
 
-const STEP: Duration = Duration::from_secs(120);
+pub(crate) const STEP: Duration = Duration::from_secs(120);
 
 const NEW: &str = "full office with mesh, all layers new (after a one-room graph)";
 const MOVED: &str = "full office with mesh, every node moved 1 cm (layers kept)";
 const EDIT: &str = "one-object edit";
 
-fn now_ns() -> u64 {
+pub(crate) fn now_ns() -> u64 {
     let t = rustix::time::clock_gettime(rustix::time::ClockId::Monotonic);
     t.tv_sec as u64 * 1_000_000_000 + t.tv_nsec as u64
 }
@@ -105,7 +105,7 @@ fn now_ns() -> u64 {
 /// nanoseconds from each thread's `/proc/PID/task/TID/schedstat` (`/proc/PID/stat`
 /// counts 10 ms ticks, too coarse for a one-object edit). Every consumer here keeps its
 /// threads for its whole life, so no exited thread's time is missed.
-fn cpu_seconds(pid: u32) -> f64 {
+pub(crate) fn cpu_seconds(pid: u32) -> f64 {
     let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
         return 0.0;
     };
@@ -139,16 +139,23 @@ pub fn run_reader(args: &HydraReaderArgs) -> Result<(), Box<dyn std::error::Erro
 }
 
 /// The Python sender.
-struct Sender {
+pub(crate) struct Sender {
     proc: Proc,
-    port: u16,
+    pub(crate) port: u16,
 }
 
 impl Sender {
-    fn start(python: &str, graph: &Path) -> Result<Self, Box<dyn std::error::Error>> {
+    pub(crate) fn start(
+        python: &str,
+        graph: &Path,
+        mesh: bool,
+    ) -> Result<Self, Box<dyn std::error::Error>> {
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/python/dsg_sender.py");
         let mut command = Command::new(python);
-        command.arg(script).arg(graph).arg("--mesh");
+        command.arg(script).arg(graph);
+        if mesh {
+            command.arg("--mesh");
+        }
         let proc = Proc::start(command, "sender", Input::Lines)?;
         let (_, line) = proc
             .wait_line_after(0, STEP, |l| l.starts_with("port="))
@@ -163,7 +170,7 @@ impl Sender {
     }
 
     /// Sends a command; returns the answer (`ok ...`).
-    fn command(&mut self, line: &str) -> Result<String, Box<dyn std::error::Error>> {
+    pub(crate) fn command(&mut self, line: &str) -> Result<String, Box<dyn std::error::Error>> {
         let skip = self.proc.stdout().len();
         self.proc.send(line)?;
         let (_, answer) = self
@@ -179,7 +186,7 @@ impl Sender {
     }
 
     /// Sends the graph (or a one-room graph); returns the send's CLOCK_MONOTONIC ns.
-    fn send(&mut self, minimal: bool) -> Result<u64, Box<dyn std::error::Error>> {
+    pub(crate) fn send(&mut self, minimal: bool) -> Result<u64, Box<dyn std::error::Error>> {
         let answer = self.command(if minimal { "send-minimal" } else { "send" })?;
         answer
             .split_whitespace()
@@ -190,13 +197,13 @@ impl Sender {
 }
 
 /// A consumer process printing one JSON line (with `t_ns`) per graph made visible.
-struct Consumer {
-    proc: Proc,
+pub(crate) struct Consumer {
+    pub(crate) proc: Proc,
 }
 
 impl Consumer {
     /// Waits for the next line after `skip` lines; returns it.
-    fn line_after(&self, skip: usize) -> Result<Value, Box<dyn std::error::Error>> {
+    pub(crate) fn line_after(&self, skip: usize) -> Result<Value, Box<dyn std::error::Error>> {
         let (_, line) = self
             .proc
             .wait_line_after(skip, STEP, |l| l.starts_with('{'))
@@ -205,7 +212,7 @@ impl Consumer {
     }
 
     /// Stdout lines so far (of any kind), for [`Consumer::line_after`].
-    fn lines(&self) -> usize {
+    pub(crate) fn lines(&self) -> usize {
         self.proc.stdout().len()
     }
 
@@ -335,11 +342,11 @@ fn phases(lines: &[String], full: bool) -> Phases {
     )
 }
 
-fn med(v: &[f64]) -> f64 {
+pub(crate) fn med(v: &[f64]) -> f64 {
     median(v).unwrap_or(f64::NAN)
 }
 
-fn ms(v: f64) -> String {
+pub(crate) fn ms(v: f64) -> String {
     format!("{:.1}", v * 1e3)
 }
 
@@ -366,7 +373,7 @@ pub fn run(args: &HydraArgs) -> Result<(), Box<dyn std::error::Error>> {
         .id;
     drop(office);
 
-    let mut sender = Sender::start(&args.python, &path)?;
+    let mut sender = Sender::start(&args.python, &path, true)?;
     let endpoint = format!("tcp://127.0.0.1:{}", sender.port);
     let ygg_bin = ygg_testkit::binary("ygg");
     let me = std::env::current_exe()?;

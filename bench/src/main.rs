@@ -8,6 +8,7 @@ mod ladder;
 mod mission;
 mod record;
 mod remote;
+mod ros2;
 
 use clap::{Parser, Subcommand};
 use ygg_store::{NodeId, SceneGraph};
@@ -40,6 +41,10 @@ enum Command {
     /// Hydra's ZMQ stream through `ygg bridge zmq` and Yggdrasil readers, against
     /// the same number of spark_dsg DsgReceivers (latency, CPU), and the binary import.
     Hydra(hydra::HydraArgs),
+    /// Hydra's DsgUpdate over ROS 2 (Cyclone DDS) through `ygg bridge ros2`, against the
+    /// same bytes over ZeroMQ; one-object incremental updates (needs root: a network
+    /// namespace).
+    Ros2(ros2::Ros2Args),
     /// A consumer process of `hydra`: prints a JSON line per new snapshot of a scene.
     #[command(hide = true)]
     HydraReader(hydra::HydraReaderArgs),
@@ -62,6 +67,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Command::Capi(args) => capi::run(&args),
         Command::Hydra(args) => hydra::run(&args),
         Command::HydraReader(args) => hydra::run_reader(&args),
+        Command::Ros2(args) => ros2::run(&args),
         Command::Remote(args) => remote::run(&args),
     }
 }

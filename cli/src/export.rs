@@ -8,6 +8,11 @@
 //!
 //! Prints one line on success: `exported scene <name> generation <n>: <nodes> nodes,
 //! <layers> layers -> <file>`.
+//!
+//! `ygg export ros2` ([`ros2`]) publishes a live scene to ROS 2 instead, as Hydra's
+//! `DsgUpdate` messages.
+
+mod ros2;
 
 use std::path::PathBuf;
 
@@ -18,35 +23,60 @@ use crate::query::{live_snapshot, seconds};
 
 /// Arguments of `ygg export`.
 #[derive(Parser, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct ExportArgs {
+    /// Publish the scene elsewhere instead of writing a file.
+    #[command(subcommand)]
+    to: Option<ExportTo>,
     /// The live scene to export.
-    #[arg(long)]
-    scene: String,
+    #[arg(long, required = true)]
+    scene: Option<String>,
     /// The `.ygg` file to write (replaced crash-safely when it exists).
-    #[arg(short, long)]
-    output: PathBuf,
+    #[arg(short, long, required = true)]
+    output: Option<PathBuf>,
     /// Seconds to wait for the scene's writer and first snapshot.
     #[arg(long, default_value_t = 5.0)]
     timeout: f64,
+}
+
+/// Where else `ygg export` publishes a scene.
+#[derive(clap::Subcommand, Debug)]
+pub enum ExportTo {
+    /// Publish a live scene on a ROS 2 topic as hydra_msgs/msg/DsgUpdate (full updates
+    /// every --full-every seconds, incremental ones between), with hydra_ros's QoS,
+    /// without ROS installed. Prints `{"event":"advertised",...}`, one
+    /// `{"event":"sent",...}` line per message and a final `{"event":"summary",...}`.
+    Ros2(ros2::Ros2ExportArgs),
 }
 
 /// Runs `ygg export`.
 ///
 /// # Errors
 /// A message naming the scene (no writer or snapshot in time) or the file that could not
-/// be written.
-pub fn run(args: &ExportArgs) -> Result<(), String> {
-    let snapshot = live_snapshot(&args.scene, seconds(args.timeout, "--timeout")?)?;
+/// be written; for `ygg export ros2`, what [`ros2::run`] reports.
+pub fn run(args: &ExportArgs) -> Result<(), Box<dyn std::error::Error>> {
+    match &args.to {
+        Some(ExportTo::Ros2(ros2)) => ros2::run(ros2),
+        None => to_file(args).map_err(Into::into),
+    }
+}
+
+/// `ygg export --scene S --output F`.
+fn to_file(args: &ExportArgs) -> Result<(), String> {
+    let (Some(scene), Some(output)) = (&args.scene, &args.output) else {
+        return Err("--scene and --output are required".to_owned());
+    };
+    let snapshot = live_snapshot(scene, seconds(args.timeout, "--timeout")?)?;
     let view = snapshot.view();
     let graph = to_owned_graph(&view);
-    graph.save(&args.output).map_err(|e| e.to_string())?;
+    graph.save(output).map_err(|e| e.to_string())?;
     println!(
         "exported scene {} generation {}: {} nodes, {} layers -> {}",
-        args.scene,
+        scene,
         snapshot.generation(),
         graph.node_count(),
         graph.layers().count(),
-        args.output.display()
+        output.display()
     );
     Ok(())
 }

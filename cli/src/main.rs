@@ -8,12 +8,13 @@
 //! | `ygg demo` | the main job: a writer serving the built-in office with a live update stream, and reader processes querying it (planner, visibility, labels), checked against brute force | [`demo`] |
 //! | `ygg serve` | serve a scene (a `.ygg` file or the built-in office), optionally with a SLAM-like update stream | [`serve`] |
 //! | `ygg import` | a Spark-DSG file (JSON or binary) to a `.ygg` snapshot in one of the paper's layouts | [`import`] |
-//! | `ygg export` | a live scene's current snapshot to a `.ygg` file | [`export`] |
+//! | `ygg export` | a live scene's current snapshot to a `.ygg` file; `ygg export ros2`: a live scene to ROS 2 as Hydra's `DsgUpdate` | [`export`] |
 //! | `ygg inspect` | a scene's layers, DAG, counts, indexes and memory; the layouts' static table of a Spark-DSG file | [`inspect`] |
 //! | `ygg query` | JSON-line object queries on a `.ygg` file or a live scene | [`query`] |
 //! | `ygg watch` | follow a live scene: a line per validated snapshot, writer exits and restarts | [`watch`] |
 //! | `ygg bridge zmq` | follow a Spark-DSG ZeroMQ stream (Hydra) and publish what changes | [`bridge`] |
 //! | `ygg view` | a scene in the browser: live, a file, or a timeline of files (runs the Python module `yggdrasil.view`) | [`view`] |
+//! | `ygg bridge ros2` | follow Hydra's ROS 2 `DsgUpdate` topic (full and incremental updates) and publish what changes | [`bridge`] |
 //!
 //! `ygg demo-role` (hidden) is one of the demo's reader processes; the demo starts it, as
 //! it starts `ygg serve`, from this same executable.
@@ -76,7 +77,8 @@ enum Command {
     /// Import a Spark-DSG file (JSON, .json.gz or binary) into a `.ygg` snapshot in one
     /// of the paper's layouts, with a progress bar.
     Import(import::ImportArgs),
-    /// Write the current snapshot of a live scene to a `.ygg` file.
+    /// Write the current snapshot of a live scene to a `.ygg` file (`ygg export ros2`:
+    /// publish a live scene to ROS 2 as hydra_msgs/msg/DsgUpdate).
     Export(export::ExportArgs),
     /// Show a scene's layers, DAG, counts, indexes and memory (a `.ygg` file or --scene),
     /// or the paper's static table of the layouts of a Spark-DSG JSON file.
@@ -94,7 +96,8 @@ enum Command {
     /// What changed in a recording between two moments: nodes added, removed, moved and
     /// relabelled, edges added and removed (one JSON object).
     Changes(changes::ChangesArgs),
-    /// Bridge another system's scene-graph stream into a scene (`ygg bridge zmq`).
+    /// Bridge another system's scene-graph stream into a scene (`ygg bridge zmq`,
+    /// `ygg bridge ros2`).
     #[command(subcommand)]
     Bridge(bridge::BridgeCommand),
     /// Show a scene in the browser (served locally, the address printed): a live scene
@@ -116,9 +119,7 @@ fn main() -> ExitCode {
         Command::Import(args) => import::run(&args)
             .map(|()| ExitCode::SUCCESS)
             .map_err(Into::into),
-        Command::Export(args) => export::run(&args)
-            .map(|()| ExitCode::SUCCESS)
-            .map_err(Into::into),
+        Command::Export(args) => export::run(&args).map(|()| ExitCode::SUCCESS),
         Command::Inspect(args) => match args.path.as_deref() {
             Some(path) if moment::is_recording(path) => timeline::run(path, &args),
             _ => inspect::run(&args),

@@ -70,6 +70,7 @@ mod progress;
 mod raw;
 mod report;
 mod symbol;
+mod update;
 
 pub mod layout;
 pub mod objects;
@@ -79,7 +80,8 @@ pub mod replay;
 #[doc(inline)]
 pub use self::binary::{
     BodyStream, ChangedNodes, StreamStep, is_binary, parse_binary, parse_binary_body,
-    parse_binary_with, parse_binary_with_progress, to_binary_body, to_binary_bytes, write_binary,
+    parse_binary_with, parse_binary_with_progress, to_binary_body, to_binary_body_at,
+    to_binary_bytes, to_binary_bytes_at, write_binary,
 };
 #[doc(inline)]
 pub use self::error::DsgImportError;
@@ -100,3 +102,5 @@ pub use self::progress::{ImportPhase, ImportProgress};
 pub use self::report::{DropClass, DroppedItems, ImportOptions, ImportReport, Imported};
 #[doc(inline)]
 pub use self::symbol::NodeSymbol;
+#[doc(inline)]
+pub use self::update::{GraphUpdate, UpdateError, UpdateReport, update_between};

@@ -273,6 +273,9 @@ impl DsgVersion {
     pub const LEGACY: Self = Self::new(1, 0, 0);
     /// The version the office generator and `gen_office_dsg.py` produce.
     pub const V1_1_3: Self = Self::new(1, 1, 3);
+    /// spark_dsg's next version (its `develop` branch): a new `Place2dNodeAttributes`
+    /// layout, nothing else in the binary encoding changes.
+    pub const V1_1_4: Self = Self::new(1, 1, 4);
 
     /// A version from its parts.
     pub const fn new(major: u32, minor: u32, patch: u32) -> Self {
@@ -286,6 +289,23 @@ impl DsgVersion {
     /// Whether this is the pre-1.1 encoding (no partitions, legacy colors and boxes).
     pub fn is_legacy(self) -> bool {
         self < Self::new(1, 1, 0)
+    }
+}
+
+impl std::str::FromStr for DsgVersion {
+    type Err = String;
+
+    /// `major.minor.patch`, e.g. `1.1.4`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let parts: Vec<u32> = s
+            .split('.')
+            .map(|p| p.parse::<u32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("{s:?} is not a version like 1.1.4"))?;
+        match parts[..] {
+            [major, minor, patch] => Ok(Self::new(major, minor, patch)),
+            _ => Err(format!("{s:?} is not a version like 1.1.4")),
+        }
     }
 }
 

@@ -4,6 +4,7 @@ import pytest
 
 import yggdrasil
 import yggdrasil.dsg as ydsg
+from conftest import REPO
 
 spark_dsg = pytest.importorskip("spark_dsg")
 
@@ -82,3 +83,19 @@ def test_graph_to_networkx(small_office):
     assert {frozenset(e) for e in a.edges} == {frozenset(e) for e in b.edges}
     some = next(iter(a.nodes))
     assert np.allclose(a.nodes[some]["position"], b.nodes[some]["position"], atol=1e-5)
+
+
+def test_facade_has_spark_dsg_1_1_4s_name_and_reads_its_binary_files():
+    """spark_dsg 1.1.4 renames DynamicSceneGraph to SceneGraph and changes the binary
+    layout of mesh places; the fixture was written by spark_dsg 1.1.4 itself (built from
+    its develop branch: dsg/tests/fixtures/README.md)."""
+    assert ydsg.SceneGraph is ydsg.DynamicSceneGraph
+    fixtures = REPO / "dsg" / "tests" / "fixtures"
+    mine = ydsg.SceneGraph.load(fixtures / "office_tiny_v1_1_4.sparkdsg")
+    theirs = spark_dsg.DynamicSceneGraph.load(str(fixtures / "office_tiny.json"))
+    assert mine.num_nodes() == theirs.num_nodes()
+    for layer in LAYERS:
+        a, b = mine.get_layer(layer), theirs.get_layer(layer)
+        assert sorted(n.id.value for n in a.nodes) == sorted(n.id.value for n in b.nodes)
+        for n in b.nodes:
+            same_node(mine.get_node(n.id.value), n, parents=False)

@@ -111,6 +111,30 @@ impl VethLink {
         command
     }
 
+    /// Routes multicast (224.0.0.0/4) out of host `side`'s end of the link, for a DDS
+    /// stack that discovers peers by multicast only (RustDDS) and skips the loopback
+    /// interface: the processes of that host then find each other there, and the
+    /// datagrams go no further than the other namespace of the pair.
+    ///
+    /// # Errors
+    /// The `ip` command's failure.
+    pub fn route_multicast(&self, side: usize) -> Result<(), String> {
+        ip(&[
+            "-n",
+            &self.ns[side],
+            "route",
+            "add",
+            "224.0.0.0/4",
+            "dev",
+            &self.veth[side],
+        ])
+    }
+
+    /// The name of host `side`'s end of the link (the interface to bind a stack to).
+    pub fn interface(&self, side: usize) -> &str {
+        &self.veth[side]
+    }
+
     /// The address of host `side`.
     pub fn address(&self, side: usize) -> &str {
         &self.addr[side]

@@ -22,6 +22,19 @@ pub(super) enum FrameError {
     Layout(#[from] layout::LayoutError),
     #[error("could not apply the message: {0}")]
     Sync(#[from] ygg_store::GraphEditError),
+    #[error(transparent)]
+    Update(#[from] ygg_dsg::UpdateError),
+}
+
+/// An incremental update: a Spark-DSG body of the nodes changed or added (and the edges
+/// added), and the nodes and edges removed ([`ygg_dsg::DsgGraph::apply_update`]).
+pub struct Delta {
+    /// The body of the changed part.
+    pub contents: Bytes,
+    /// Nodes removed.
+    pub deleted_nodes: Vec<u64>,
+    /// Edges removed, as consecutive (source, target) pairs.
+    pub deleted_edges: Vec<u64>,
 }
 
 /// How a message reached the live graph.
@@ -67,10 +80,11 @@ pub(super) struct Follower {
 }
 
 impl Follower {
-    /// A follower building `layout`; the first message is decoded in full.
-    pub(super) fn new(layout: Layout) -> Self {
+    /// A follower building `layout` from bodies encoded at `version`; the first message
+    /// is decoded in full. `source` names the messages in errors (`zmq message`).
+    pub(super) fn new(layout: Layout, source: &str, version: DsgVersion) -> Self {
         Self {
-            stream: BodyStream::new(DsgVersion::V1_1_3, "zmq message"),
+            stream: BodyStream::new(version, source),
             layout,
         }
     }
@@ -121,12 +135,62 @@ impl Follower {
             (None, Some(changed)) => patch::plan_changed(changed, graph, self.layout),
             (None, None) => None,
         };
+        self.patch_or_build(moves, live, t0, step.mesh_reused)
+    }
+
+    /// Brings `live` to the stream's graph after applying the incremental update `delta`
+    /// to it: the moves of the nodes it replaced when that is all it did, else the
+    /// general path.
+    ///
+    /// # Errors
+    /// As [`Follower::apply`], and an update that does not fit the graph (which then
+    /// stays as it was).
+    pub(super) fn apply_update(
+        &mut self,
+        delta: &Delta,
+        live: &mut SceneGraph,
+    ) -> Result<Applied, FrameError> {
+        let t0 = Instant::now();
+        let report = self.stream.apply_update(
+            &delta.contents,
+            &delta.deleted_nodes,
+            &delta.deleted_edges,
+        )?;
+        let graph = self.stream.graph().expect("updated above");
+        if report.nodes_only() && report.replaced.is_empty() {
+            return Ok(Applied {
+                path: Path::Unchanged,
+                mesh_reused: true,
+                report: SyncReport::default(),
+                decode: t0.elapsed(),
+                sync: Duration::ZERO,
+            });
+        }
+        let moves = report.nodes_only().then(|| {
+            let pairs = report
+                .replaced
+                .iter()
+                .map(|(i, old)| (old, &graph.nodes[*i]));
+            patch::node_moves(pairs, graph, self.layout)
+        });
+        self.patch_or_build(moves.flatten(), live, t0, !report.rest_changed)
+    }
+
+    /// Applies `moves` to `live` when there are some and `live` takes them, else builds
+    /// the stream's graph and syncs `live` to it; `t0`: when the message arrived.
+    fn patch_or_build(
+        &mut self,
+        moves: Option<Vec<patch::Move>>,
+        live: &mut SceneGraph,
+        t0: Instant,
+        mesh_reused: bool,
+    ) -> Result<Applied, FrameError> {
         if let Some(moves) = moves {
             let t1 = Instant::now();
             if let Ok(report) = patch::apply(live, &moves) {
                 return Ok(Applied {
                     path: Path::Patch,
-                    mesh_reused: step.mesh_reused,
+                    mesh_reused,
                     report,
                     decode: t1 - t0,
                     sync: t1.elapsed(),
@@ -142,7 +206,7 @@ impl Follower {
         match synced {
             Ok((report, t1)) => Ok(Applied {
                 path: Path::Build,
-                mesh_reused: step.mesh_reused,
+                mesh_reused,
                 report,
                 decode: t1 - t0,
                 sync: t1.elapsed(),
@@ -268,7 +332,7 @@ mod tests {
             seed: 5,
             scale: 0.03,
         });
-        let mut follower = Follower::new(layout);
+        let mut follower = Follower::new(layout, "zmq message", DsgVersion::V1_1_3);
         let first = Bytes::from(to_binary_body(&g).expect("encode"));
         let mut live = follower.first(vec![first]).expect("first").expect("new");
         let mut paths = [0; 3];

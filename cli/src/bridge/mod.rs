@@ -1,10 +1,12 @@
 //! `ygg bridge <source>`: live bridges from another system's scene-graph stream into a
-//! scene in shared memory. `ygg bridge zmq` follows Spark-DSG's ZeroMQ stream (Hydra).
+//! scene in shared memory. `ygg bridge zmq` follows Spark-DSG's ZeroMQ stream (Hydra),
+//! `ygg bridge ros2` Hydra's ROS 2 `DsgUpdate` topic.
 //!
 //! Every source shares one core, [`publish`]: a source hands it each message's frames
 //! (a Spark-DSG binary body) and it decodes, brings its live graph to equal the message's
 //! graph and publishes only the changed layers, printing the bridge's JSON lines. The
-//! source modules ([`zmq`]) only receive bytes; a ROS 2 source is another such module.
+//! source modules ([`zmq`], [`ros2`]) only receive bytes. A numbered source (ROS 2) also
+//! sends incremental updates, applied in order ([`sequence`]) to the last graph.
 //!
 //! Spark-DSG publishes the whole graph in every message: one frame, the header-less
 //! binary body of `to_binary()`. The bridge decodes each message once, builds it in the
@@ -26,9 +28,13 @@
 mod follow;
 mod patch;
 mod publish;
+mod ros2;
+mod sequence;
 mod zmq;
 
 use clap::Subcommand;
+
+pub use ros2::domain_id;
 
 /// The sources `ygg bridge` follows.
 #[derive(Subcommand, Debug)]
@@ -44,6 +50,15 @@ pub enum BridgeCommand {
     /// `{"event":"summary",...}`. Exits cleanly, removing its shared memory, on
     /// SIGINT/SIGTERM or after --seconds.
     Zmq(zmq::ZmqArgs),
+    /// Bridge Hydra's ROS 2 output (`hydra_msgs/msg/DsgUpdate` on /hydra/backend/dsg)
+    /// into a scene, as a ROS 2 subscriber with hydra_ros's QoS, without ROS installed:
+    /// full updates as `bridge zmq` applies frames, incremental ones in sequence_number
+    /// order (after a gap it waits for the next full update).
+    ///
+    /// Prints `{"event":"subscribed",...}`, then the lines of `bridge zmq` (`ready`,
+    /// `update`, `bad-frame`, `summary`) with the message's `sequence_number`, and
+    /// `{"event":"skipped",...}` for an incremental update out of sequence.
+    Ros2(ros2::Ros2Args),
 }
 
 /// Runs the bridge `command` until a signal, `--seconds`, or a fatal error.
@@ -54,5 +69,6 @@ pub enum BridgeCommand {
 pub fn run(command: &BridgeCommand) -> Result<(), Box<dyn std::error::Error>> {
     match command {
         BridgeCommand::Zmq(args) => zmq::run(args),
+        BridgeCommand::Ros2(args) => ros2::run(args),
     }
 }

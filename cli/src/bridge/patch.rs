@@ -88,7 +88,7 @@ pub(super) fn plan_changed(
 
 /// The moves taking each node of `pairs` (previous, next) to its new value, when every
 /// difference is a move the layout answers node by node (the module docs); `None` else.
-fn node_moves<'a>(
+pub(super) fn node_moves<'a>(
     pairs: impl Iterator<Item = (&'a DsgNode, &'a DsgNode)>,
     next: &DsgGraph,
     layout: Layout,

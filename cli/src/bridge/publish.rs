@@ -8,7 +8,16 @@ use bytes::Bytes;
 use ygg_dsg::layout::Layout;
 use ygg_writer::SceneWriter;
 
-use super::follow::Follower;
+use super::follow::{Delta, Follower};
+use super::sequence::{Sequence, Verdict};
+
+/// One message of a source: a full graph (Spark-DSG's frames) or an incremental update.
+pub enum Message {
+    /// The frames of a full-state message (one Spark-DSG body).
+    Full(Vec<Bytes>),
+    /// An incremental update of the last graph.
+    Incremental(Delta),
+}
 
 /// Where and how a bridge publishes: the options every source takes.
 #[derive(clap::Args, Debug)]
@@ -26,6 +35,11 @@ pub struct PublishArgs {
     /// per-room layouts add layers per room); a lower bound makes readers attach faster.
     #[arg(long, default_value_t = ygg_transport::service::DEFAULT_MAX_SEGMENTS)]
     pub max_layers: usize,
+    /// The Spark-DSG version of the sender (its bodies carry no header and are read as
+    /// the sender's own version): 1.1.3 (the released spark_dsg), or 1.1.4 (its
+    /// `develop` branch, another `Place2dNodeAttributes` layout).
+    #[arg(long, default_value = "1.1.3")]
+    pub spark_dsg_version: ygg_dsg::DsgVersion,
 }
 
 /// A bridge's scene: created from the first good message, then brought to each next
@@ -40,24 +54,31 @@ pub struct ScenePublisher<'a> {
     skipped: u64,
     bad: u64,
     published: u64,
+    /// Where a numbered stream stands ([`ScenePublisher::numbered`]).
+    sequence: Sequence,
+    /// Numbered messages skipped for their number (stale, after a gap, waiting).
+    out_of_sequence: u64,
 }
 
 impl<'a> ScenePublisher<'a> {
-    /// A bridge with no scene yet (it is created by the first good message).
+    /// A bridge with no scene yet (it is created by the first good message); `source`
+    /// names its messages in errors (`zmq message`).
     ///
     /// # Errors
     /// When the scene name is not valid (checked before the source connects).
-    pub fn new(args: &'a PublishArgs) -> Result<Self, Box<dyn std::error::Error>> {
+    pub fn new(args: &'a PublishArgs, source: &str) -> Result<Self, Box<dyn std::error::Error>> {
         ygg_transport::service::SceneServices::new(&args.scene)?;
         Ok(Self {
             args,
             writer: None,
-            follower: Follower::new(args.layout),
+            follower: Follower::new(args.layout, source, args.spark_dsg_version),
             start: Instant::now(),
             received: 0,
             skipped: 0,
             bad: 0,
             published: 0,
+            sequence: Sequence::default(),
+            out_of_sequence: 0,
         })
     }
 
@@ -87,10 +108,75 @@ impl<'a> ScenePublisher<'a> {
         frames: Vec<Bytes>,
         stale: u64,
     ) -> Result<(), Box<dyn std::error::Error>> {
-        let t0 = Instant::now();
         self.received += 1 + stale;
         self.skipped += stale;
-        let bytes: usize = frames.iter().map(Bytes::len).sum();
+        self.apply(Message::Full(frames), stale, None).map(drop)
+    }
+
+    /// Applies a message numbered `number` (hydra_msgs' `DsgUpdate.sequence_number`) in
+    /// order ([`super::sequence`]): an incremental one only on top of the one numbered
+    /// just before it, else it is skipped with a `skipped` line (a gap makes the bridge
+    /// wait for the next full update); then as [`ScenePublisher::message`].
+    ///
+    /// # Errors
+    /// When the scene cannot be created or published.
+    pub fn numbered(
+        &mut self,
+        number: i64,
+        message: Message,
+    ) -> Result<(), Box<dyn std::error::Error>> {
+        self.received += 1;
+        let full = matches!(message, Message::Full(_));
+        let verdict = self.sequence.admit(number, full);
+        if verdict != Verdict::Apply {
+            self.out_of_sequence += 1;
+            let expected = match verdict {
+                Verdict::Gap { expected } => Some(expected),
+                _ => None,
+            };
+            eprintln!(
+                "ygg bridge: skipped update {number} ({}{})",
+                verdict.name(),
+                expected.map_or(String::new(), |e| format!(": {e} is missing"))
+            );
+            println!(
+                "{}",
+                serde_json::json!({"event": "skipped", "sequence_number": number,
+                    "reason": verdict.name(), "expected": expected})
+            );
+            return Ok(());
+        }
+        let ok = self.apply(message, 0, Some((number, full)))?;
+        self.sequence.applied(number, ok);
+        Ok(())
+    }
+
+    /// Counts and reports a message whose bytes are not one (a `bad-frame` line); the
+    /// numbered stream then waits for a full update (the message may have been one).
+    pub fn undecodable(&mut self, e: &dyn std::fmt::Display) {
+        self.received += 1;
+        self.bad += 1;
+        self.sequence = Sequence::default();
+        eprintln!("ygg bridge: skipped a message that does not decode: {e}");
+        println!(
+            "{}",
+            serde_json::json!({"event": "bad-frame", "bytes": null, "error": e.to_string()})
+        );
+    }
+
+    /// Applies one message; `Ok(false)` when it was bad (and skipped).
+    fn apply(
+        &mut self,
+        message: Message,
+        stale: u64,
+        numbered: Option<(i64, bool)>,
+    ) -> Result<bool, Box<dyn std::error::Error>> {
+        let t0 = Instant::now();
+        let (number, full) = numbered.unzip();
+        let bytes: usize = match &message {
+            Message::Full(frames) => frames.iter().map(Bytes::len).sum(),
+            Message::Incremental(d) => d.contents.len(),
+        };
         let bad_frame = |e: &dyn std::fmt::Display| {
             eprintln!("ygg bridge: skipped a bad frame ({bytes} bytes): {e}");
             println!(
@@ -99,13 +185,17 @@ impl<'a> ScenePublisher<'a> {
             );
         };
         let Some(w) = self.writer.as_mut() else {
-            let target = match self.follower.first(frames) {
+            let first = match message {
+                Message::Full(frames) => self.follower.first(frames),
+                Message::Incremental(_) => Err(ygg_dsg::UpdateError::NoGraph.into()),
+            };
+            let target = match first {
                 Ok(Some(g)) => g,
-                Ok(None) => return Ok(()),
+                Ok(None) => return Ok(true),
                 Err(e) => {
                     self.bad += 1;
                     bad_frame(&e);
-                    return Ok(());
+                    return Ok(false);
                 }
             };
             let t1 = Instant::now();
@@ -122,18 +212,23 @@ impl<'a> ScenePublisher<'a> {
                 serde_json::json!({"event": "ready", "scene": self.args.scene,
                     "session": w.publisher().session(), "generation": r.generation,
                     "nodes": nodes, "layers": layers, "bytes": bytes,
+                    "sequence_number": number,
                     "decode_us": (t1 - t0).as_secs_f64() * 1e6,
                     "publish_us": t1.elapsed().as_secs_f64() * 1e6})
             );
             self.writer = Some(w);
-            return Ok(());
+            return Ok(true);
         };
-        let applied = match self.follower.apply(frames, w.graph_mut()) {
+        let applied = match message {
+            Message::Full(frames) => self.follower.apply(frames, w.graph_mut()),
+            Message::Incremental(delta) => self.follower.apply_update(&delta, w.graph_mut()),
+        };
+        let applied = match applied {
             Ok(a) => a,
             Err(e) => {
                 self.bad += 1;
                 bad_frame(&e);
-                return Ok(());
+                return Ok(false);
             }
         };
         let t2 = Instant::now();
@@ -148,6 +243,7 @@ impl<'a> ScenePublisher<'a> {
             "{}",
             serde_json::json!({"event": "update", "generation": generation, "bytes": bytes,
                 "skipped": stale, "path": applied.path.name(), "mesh_reused": applied.mesh_reused,
+                "sequence_number": number, "full_update": full,
                 "changed_layers": report.changed_layers,
                 "nodes_added": report.nodes_added, "nodes_removed": report.nodes_removed,
                 "nodes_moved": report.nodes_moved, "nodes_changed": report.nodes_changed,
@@ -156,7 +252,7 @@ impl<'a> ScenePublisher<'a> {
                 "publish_us": t2.elapsed().as_secs_f64() * 1e6,
                 "total_us": t0.elapsed().as_secs_f64() * 1e6})
         );
-        Ok(())
+        Ok(true)
     }
 
     /// Removes the scene (readers keep their last snapshot) and prints the `summary` line
@@ -166,7 +262,8 @@ impl<'a> ScenePublisher<'a> {
         println!(
             "{}",
             serde_json::json!({"event": "summary", "stop": stop, "received": self.received,
-                "skipped_stale": self.skipped, "bad_frames": self.bad, "published": self.published,
+                "skipped_stale": self.skipped, "out_of_sequence": self.out_of_sequence,
+                "bad_frames": self.bad, "published": self.published,
                 "seconds": self.start.elapsed().as_secs_f64()})
         );
     }

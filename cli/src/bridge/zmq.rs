@@ -58,7 +58,7 @@ pub fn run(args: &ZmqArgs) -> Result<(), Box<dyn std::error::Error>> {
         return Err("--seconds must be a positive number".into());
     }
     // Checks the scene name before connecting (creating the writer checks it again).
-    let mut scene = ScenePublisher::new(&args.publish)?;
+    let mut scene = ScenePublisher::new(&args.publish, "zmq message")?;
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;

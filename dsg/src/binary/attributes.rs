@@ -191,7 +191,7 @@ pub(super) fn read_node<'a>(
                     })?;
                 }
                 NodeLayout::Place => place(c, v)?,
-                NodeLayout::Place2d => place2d(c)?,
+                NodeLayout::Place2d => place2d(c, v)?,
                 _ => {}
             }
         }
@@ -369,22 +369,41 @@ fn place(c: &mut Cursor<'_>, v: Ver) -> Decoded<()> {
     Ok(())
 }
 
-/// `Place2dNodeAttributes` after the semantic fields.
-fn place2d(c: &mut Cursor<'_>) -> Decoded<()> {
-    list(c, "attributes.boundary", 3 * Scalar::F64.encoded(), |c| {
-        c.vec3_f64("").map(drop)
-    })?;
-    c.vec3_f64("attributes.ellipse_centroid")?;
-    matrix(c, Scalar::F64, Shape::Exact(2, 2))
-        .map_err(|e| e.within("attributes.ellipse_matrix_compress"))?;
-    matrix(c, Scalar::F64, Shape::Exact(2, 2))
-        .map_err(|e| e.within("attributes.ellipse_matrix_expand"))?;
-    scalars(c, Scalar::U64, "attributes.pcl_boundary_connections")?;
-    list(c, "attributes.voxblox_mesh_connections", 1, nearest_vertex)?;
-    scalars(c, Scalar::U64, "attributes.pcl_mesh_connections")?;
-    scalars(c, Scalar::U8, "attributes.mesh_vertex_labels")?;
-    scalars(c, Scalar::U64, "attributes.deformation_connections")?;
-    c.bool("attributes.need_cleanup_splitting")?;
+/// `Place2dNodeAttributes` after the semantic fields: spark_dsg 1.1.4 (its `develop`
+/// branch, `node_attributes.cpp`) dropped the voxblox and deformation fields, renamed
+/// the mesh fields and moved them first, and added the mesh index range; bodies before
+/// 1.1.4 keep 1.1.3's layout.
+fn place2d(c: &mut Cursor<'_>, v: Ver) -> Decoded<()> {
+    let boundary = |c: &mut Cursor<'_>| {
+        list(c, "attributes.boundary", 3 * Scalar::F64.encoded(), |c| {
+            c.vec3_f64("").map(drop)
+        })
+    };
+    let ellipse = |c: &mut Cursor<'_>| -> Decoded<()> {
+        c.vec3_f64("attributes.ellipse_centroid")?;
+        matrix(c, Scalar::F64, Shape::Exact(2, 2))
+            .map_err(|e| e.within("attributes.ellipse_matrix_compress"))?;
+        matrix(c, Scalar::F64, Shape::Exact(2, 2))
+            .map_err(|e| e.within("attributes.ellipse_matrix_expand"))
+    };
+    if v.before(1, 1, 4) {
+        boundary(c)?;
+        ellipse(c)?;
+        scalars(c, Scalar::U64, "attributes.pcl_boundary_connections")?;
+        list(c, "attributes.voxblox_mesh_connections", 1, nearest_vertex)?;
+        scalars(c, Scalar::U64, "attributes.pcl_mesh_connections")?;
+        scalars(c, Scalar::U8, "attributes.mesh_vertex_labels")?;
+        scalars(c, Scalar::U64, "attributes.deformation_connections")?;
+        c.bool("attributes.need_cleanup_splitting")?;
+    } else {
+        scalars(c, Scalar::U64, "attributes.mesh_connections")?;
+        scalars(c, Scalar::U64, "attributes.boundary_connections")?;
+        boundary(c)?;
+        ellipse(c)?;
+        c.u64("attributes.min_mesh_index")?;
+        c.u64("attributes.max_mesh_index")?;
+        c.bool("attributes.need_finish_merge")?;
+    }
     c.bool("attributes.has_active_mesh_indices")?;
     Ok(())
 }
@@ -606,6 +625,8 @@ pub(super) struct NodeOut<'g> {
     pub external_key: u64,
     /// For mesh places: `ellipse_centroid`.
     pub centroid: [f64; 3],
+    /// For mesh places: spark_dsg 1.1.4's layout (else 1.1.3's).
+    pub place2d_1_1_4: bool,
 }
 
 const IDENTITY_Q: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
@@ -659,18 +680,31 @@ pub(super) fn write_node(w: &mut Writer, n: &NodeOut<'_>) {
             w.bool(false); // anti_frontier
         }
         NodeLayout::Place2d => {
-            w.array(0); // boundary
-            w.vec3_f64(n.centroid);
-            for _ in 0..2 {
-                w.matrix_header(2, 2);
-                for x in [1.0, 0.0, 0.0, 1.0] {
-                    w.f64(x);
+            let ellipse = |w: &mut Writer| {
+                w.vec3_f64(n.centroid);
+                for _ in 0..2 {
+                    w.matrix_header(2, 2);
+                    for x in [1.0, 0.0, 0.0, 1.0] {
+                        w.f64(x);
+                    }
                 }
+            };
+            if n.place2d_1_1_4 {
+                w.array(0); // mesh_connections
+                w.array(0); // boundary_connections
+                w.array(0); // boundary
+                ellipse(w);
+                w.u64(0); // min_mesh_index
+                w.u64(0); // max_mesh_index
+                w.bool(false); // need_finish_merge
+            } else {
+                w.array(0); // boundary
+                ellipse(w);
+                for _ in 0..5 {
+                    w.array(0); // boundary conns, voxblox, pcl, vertex labels, deformation
+                }
+                w.bool(false); // need_cleanup_splitting
             }
-            for _ in 0..5 {
-                w.array(0); // boundary conns, voxblox, pcl, vertex labels, deformation
-            }
-            w.bool(false); // need_cleanup_splitting
             w.bool(false); // has_active_mesh_indices
         }
         _ => {}

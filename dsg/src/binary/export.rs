@@ -11,7 +11,7 @@ use super::graph::IDENTIFIER;
 use super::mesh;
 use super::writer::Writer;
 use crate::json::{DsgExportError, box_axis, layer_keys, layer_names, name_to_write};
-use crate::model::{DsgEdge, DsgGraph, NodeKind};
+use crate::model::{DsgEdge, DsgGraph, DsgVersion, NodeKind};
 
 /// Writes `graph` as a spark_dsg 1.1.3 binary file (`.sparkdsg`: header, then the
 /// body) at `path` (created or truncated).
@@ -64,14 +64,54 @@ pub fn write_binary(graph: &DsgGraph, path: impl AsRef<Path>) -> Result<(), DsgE
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn to_binary_bytes(graph: &DsgGraph) -> Result<Vec<u8>, DsgExportError> {
+    to_binary_bytes_at(graph, DsgVersion::V1_1_3)
+}
+
+/// [`to_binary_bytes`] in the encoding of `version`: 1.1.3, or 1.1.4 (spark_dsg's
+/// `develop` branch: only `Place2dNodeAttributes` differ), with that version in the
+/// header.
+///
+/// # Errors
+/// As [`to_binary_bytes`], and [`DsgExportError::Unrepresentable`] for another version.
+///
+/// # Examples
+/// ```
+/// use ygg_dsg::{self as dsg, office::{generate, OfficeParams}};
+/// let g = generate(OfficeParams { seed: 7, scale: 0.02 });
+/// let bytes = dsg::to_binary_bytes_at(&g, dsg::DsgVersion::V1_1_4)?;
+/// let back = dsg::parse_binary(&bytes, "office.sparkdsg")?;
+/// assert_eq!(back.version, dsg::DsgVersion::V1_1_4);
+/// assert_eq!(back.nodes, g.nodes);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn to_binary_bytes_at(
+    graph: &DsgGraph,
+    version: DsgVersion,
+) -> Result<Vec<u8>, DsgExportError> {
     let mut w = Writer::with_capacity(estimate_len(graph));
     w.str(IDENTIFIER);
     w.str("main");
-    w.u8(1);
-    w.u8(1);
-    w.u8(3);
-    body(graph, &mut w)?;
+    for part in [version.major, version.minor, version.patch] {
+        w.u8(u8::try_from(part).map_err(|_| unwritable(version))?);
+    }
+    body(graph, &mut w, writes_1_1_4(version)?)?;
     w.finish().map_err(too_long)
+}
+
+/// Whether `version` is written in 1.1.4's layout; an error for versions the writer
+/// does not write.
+fn writes_1_1_4(version: DsgVersion) -> Result<bool, DsgExportError> {
+    match version {
+        DsgVersion::V1_1_3 => Ok(false),
+        DsgVersion::V1_1_4 => Ok(true),
+        other => Err(unwritable(other)),
+    }
+}
+
+fn unwritable(version: DsgVersion) -> DsgExportError {
+    DsgExportError::Unrepresentable {
+        what: format!("Spark-DSG binary version {version} (the writer writes 1.1.3 and 1.1.4)"),
+    }
 }
 
 /// The body alone, as spark_dsg's `to_binary()` gives it (what Hydra sends over ZMQ
@@ -81,8 +121,18 @@ pub fn to_binary_bytes(graph: &DsgGraph) -> Result<Vec<u8>, DsgExportError> {
 /// # Errors
 /// As [`to_binary_bytes`].
 pub fn to_binary_body(graph: &DsgGraph) -> Result<Vec<u8>, DsgExportError> {
+    to_binary_body_at(graph, DsgVersion::V1_1_3)
+}
+
+/// [`to_binary_body`] in the encoding of `version` (1.1.3 or 1.1.4, as
+/// [`to_binary_bytes_at`]); read it with [`parse_binary_body`](crate::parse_binary_body)
+/// at the same version.
+///
+/// # Errors
+/// As [`to_binary_bytes_at`].
+pub fn to_binary_body_at(graph: &DsgGraph, version: DsgVersion) -> Result<Vec<u8>, DsgExportError> {
     let mut w = Writer::with_capacity(estimate_len(graph));
-    body(graph, &mut w)?;
+    body(graph, &mut w, writes_1_1_4(version)?)?;
     w.finish().map_err(too_long)
 }
 
@@ -103,7 +153,7 @@ fn estimate_len(g: &DsgGraph) -> usize {
     4096 + g.nodes.len() * 400 + edges * 50 + claims * 9 + mesh
 }
 
-fn body(g: &DsgGraph, w: &mut Writer) -> Result<(), DsgExportError> {
+fn body(g: &DsgGraph, w: &mut Writer, place2d_1_1_4: bool) -> Result<(), DsgExportError> {
     let keys = layer_keys(g);
     w.array(keys.len());
     for k in &keys {
@@ -156,6 +206,7 @@ fn body(g: &DsgGraph, w: &mut Writer) -> Result<(), DsgExportError> {
             })?,
             external_key: n.id,
             centroid: n.position.map(f64::from),
+            place2d_1_1_4,
         };
         attributes::write_node(w, &out);
     }

@@ -34,7 +34,9 @@ mod reader;
 mod stream;
 mod writer;
 
-pub use self::export::{to_binary_body, to_binary_bytes, write_binary};
+pub use self::export::{
+    to_binary_body, to_binary_body_at, to_binary_bytes, to_binary_bytes_at, write_binary,
+};
 pub use self::stream::{BodyStream, ChangedNodes, StreamStep};
 
 use self::reader::DecodeError;

@@ -31,6 +31,7 @@ use crate::error::DsgImportError;
 use crate::json::{build_graph, build_node_in_layer};
 use crate::model::{DsgGraph, DsgMesh, DsgNode, DsgVersion};
 use crate::report::ImportOptions;
+use crate::update::{UpdateError, UpdateReport};
 
 /// A decoder for successive header-less bodies of one stream (Spark-DSG's ZMQ messages,
 /// each the whole graph), reusing what the last good body already decoded: a body equal
@@ -72,6 +73,10 @@ struct Last<B> {
     /// `None` for versions before 1.1.0.
     records: Option<NodeRecords>,
     graph: DsgGraph,
+    /// Whether `graph` is still `body`'s: false once an incremental update changed it.
+    graph_is_body: bool,
+    /// Whether `graph`'s mesh is still the one of `body`'s mesh section.
+    mesh_is_body: bool,
 }
 
 /// The nodes that alone differ from the previous graph, when only their records changed.
@@ -131,6 +136,33 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         self.last = None;
     }
 
+    /// Applies an incremental update to the stream's graph
+    /// ([`DsgGraph::apply_update`]): `part` is a body (encoded at the stream's version)
+    /// holding the nodes changed or added and the edges added. The next full body is then
+    /// decoded against the updated graph: its `previous` is that graph, and its mesh is
+    /// still reused when neither the update nor the body changed it.
+    ///
+    /// # Errors
+    /// [`UpdateError::NoGraph`] before a first good body, the part's decoding error, or
+    /// what [`DsgGraph::apply_update`] refuses; the stream then keeps its graph.
+    pub fn apply_update(
+        &mut self,
+        part: &[u8],
+        deleted_nodes: &[u64],
+        deleted_edges: &[u64],
+    ) -> Result<UpdateReport, UpdateError> {
+        let version = self.version;
+        let part = super::parse_binary_body(part, version, &self.source_name)?;
+        let last = self.last.as_mut().ok_or(UpdateError::NoGraph)?;
+        let mesh_sent = part.mesh.is_some();
+        let report = last
+            .graph
+            .apply_update(part, deleted_nodes, deleted_edges)?;
+        last.graph_is_body = false;
+        last.mesh_is_body &= !mesh_sent;
+        Ok(report)
+    }
+
     /// Decodes `body`, reusing the last body's mesh when the mesh section is unchanged,
     /// and the last graph's nodes when only some node records changed.
     /// Returns `None`, and keeps the last graph, when `body` equals the last body byte
@@ -146,6 +178,7 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
             .as_ref()
             .map(|l| Overlap::of(l.body.as_ref(), body.as_ref()));
         if let (Some(l), Some(o)) = (&self.last, overlap)
+            && l.graph_is_body
             && o.is_whole(l.body.as_ref(), body.as_ref())
         {
             return Ok(None);
@@ -166,11 +199,9 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
         let tail = c.position()..bytes.len();
         // The tails are equal when they have one length and the common suffix covers it
         // (the suffix stops short of the common prefix only inside a differing tail).
-        let same_tail = self
-            .last
-            .as_ref()
-            .zip(overlap)
-            .is_some_and(|(l, o)| l.tail.len() == tail.len() && o.suffix >= tail.len());
+        let same_tail = self.last.as_ref().zip(overlap).is_some_and(|(l, o)| {
+            l.mesh_is_body && l.tail.len() == tail.len() && o.suffix >= tail.len()
+        });
         let build = |raw| build_graph(raw, &self.source_name, ImportOptions::STRICT, &mut |_| {});
         let (graph, mesh_reused) = if same_tail {
             let mut graph = build(raw)?.graph;
@@ -195,6 +226,8 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
                 tail,
                 records,
                 graph,
+                graph_is_body: true,
+                mesh_is_body: true,
             })
             .map(|l| l.graph);
         Ok(Some(StreamStep {
@@ -240,7 +273,7 @@ impl<B: AsRef<[u8]>> BodyStream<B> {
     /// Decodes again the node records of `new` that differ from the last body's, when
     /// nothing else differs and each keeps its node's id and layer; `None` otherwise.
     fn redecode_changed_records(&self, new: &[u8], overlap: Overlap) -> Option<Redecoded> {
-        let last = self.last.as_ref()?;
+        let last = self.last.as_ref().filter(|l| l.graph_is_body)?;
         let records = last.records.as_ref()?;
         let old = last.body.as_ref();
         let bounds = &records.bounds;

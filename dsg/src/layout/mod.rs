@@ -28,10 +28,13 @@
 //! [`layer_roles`]).
 
 mod role;
+mod unbuild;
 mod whereabouts;
 
 #[doc(inline)]
 pub use self::role::{LayerRole, layer_roles, layer_with_role};
+#[doc(inline)]
+pub use self::unbuild::to_dsg;
 #[doc(inline)]
 pub use self::whereabouts::{AgentPose, RoomScope, newest_pose, owners, room_of, room_scope};
 

@@ -62,6 +62,10 @@ from ._types import (
 )
 from .networkx import graph_to_networkx, layer_to_networkx
 
+#: spark_dsg 1.1.4's name for the graph class (its ``develop`` branch renames
+#: ``DynamicSceneGraph`` to ``SceneGraph``); both names are the same class here.
+SceneGraph = DynamicSceneGraph
+
 __all__ = [
     "AgentNodeAttributes",
     "BoundingBox",
@@ -81,6 +85,7 @@ __all__ = [
     "PlaceNodeAttributes",
     "Quaternion",
     "RoomNodeAttributes",
+    "SceneGraph",
     "SceneGraphEdge",
     "SceneGraphLayer",
     "SceneGraphNode",
