@@ -131,6 +131,27 @@ def test_a_timeline_of_cuts_loads_each_cut_by_its_generation():
     assert timeline.entries[0].label == "generation 5 at 10.250 s"
 
 
+def test_a_recording_is_a_timeline_of_its_cuts(scene_name, tmp_path):
+    graph = small_graph()
+    path = tmp_path / "run.yggrec"
+    with yggdrasil.Writer(scene_name, graph) as writer:
+        recorder = yggdrasil.Recorder(scene_name, path, wait_for_writer=10)
+        assert recorder.record_next(10)
+        for x in (3.0, 6.0):
+            graph.set_geometry(MOVING, [[x, 0.0, 0.0]])
+            writer.publish()
+            assert recorder.record_next(10)
+        del recorder
+    timeline = Timeline.of_recording(str(path))
+    recording = yggdrasil.open_recording(path)
+    assert len(timeline) == len(recording) == 3
+    for i, generation in enumerate(recording.cuts["generation"]):
+        scene = timeline.scene(i)
+        assert scene.generation == generation
+        assert scene.node(MOVING).points.tolist() == recording.at(generation=int(generation)).node(MOVING).points.tolist()
+    assert timeline.scene(2).node(MOVING).points.tolist() == [[6.0, 0.0, 0.0]]
+
+
 def test_view_reports_a_missing_file_and_a_bad_height(tmp_path):
     ygg = binary("ygg")
     run = subprocess.run([ygg, "view", str(tmp_path / "none.ygg")], capture_output=True, text=True, timeout=60)

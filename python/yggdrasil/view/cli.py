@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import sys
 import threading
@@ -84,7 +85,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     source = None
     try:
         # The input first: a missing file or writer is reported before a page is served.
-        if len(args.files) == 1:
+        if len(args.files) == 1 and os.path.isdir(args.files[0]):
+            timeline = Timeline.of_recording(args.files[0])
+            first, mesh = timeline.scene(0), None
+        elif len(args.files) == 1:
             loaded = load_file(args.files[0], args.layout)
             first, mesh, timeline = loaded.scene, loaded.mesh, None
         elif args.files:

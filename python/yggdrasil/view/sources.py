@@ -111,6 +111,14 @@ class Timeline:
         return cls(entries)
 
     @classmethod
+    def of_recording(cls, path: str) -> "Timeline":
+        """A timeline over every cut of a recording folder (``ygg record``); each cut is
+        opened in place when the slider reaches it. Raises ``yggdrasil.FileError``."""
+        recording = yggdrasil.open_recording(path)
+        cuts = recording.cuts
+        return cls.of_cuts(cuts["generation"], cuts["time"], recording.at)
+
+    @classmethod
     def of_files(cls, paths: Sequence[str], layout: str = "mint") -> "Timeline":
         """A timeline over files, in the order given (each one's modification time is
         shown); each file is opened when the slider reaches it."""
