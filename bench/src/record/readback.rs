@@ -240,7 +240,7 @@ pub fn markdown(r: &Value) -> String {
     let mut s = String::new();
     s += "# Recording a live scene: issue 41's targets (`ygg-bench record`)\n\n";
     s += &format!(
-        "Machine: {} ({} cores), load average at the end {}. Other builds and tests ran on \
+        "Machine: {} ({} cores), load average at the start {}. Other builds and tests ran on \
          this machine during the run (noisy: medians, and the paired windows alternate in \
          the same run).\n\n",
         m["cpu"].as_str().unwrap_or("?"),

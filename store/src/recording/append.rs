@@ -21,7 +21,8 @@ const CUTS_PER_CHECKPOINT: u32 = 256;
 /// bound is passed, and nothing else is rewritten.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RecordingOptions {
-    /// Largest size of one file before the next cut starts a new one (default 64 MiB).
+    /// Largest size of one file before the next cut starts a new one (default 256 MiB:
+    /// each file re-records the whole scene once, about 4% of a file for the office).
     pub file_bytes: u64,
     /// Keep the files' total under this many bytes by dropping the oldest (none by
     /// default). Files then hold at most a quarter of it each.
@@ -34,7 +35,7 @@ pub struct RecordingOptions {
 impl Default for RecordingOptions {
     fn default() -> Self {
         RecordingOptions {
-            file_bytes: 64 << 20,
+            file_bytes: 256 << 20,
             max_bytes: None,
             max_age: None,
         }
