@@ -160,10 +160,10 @@ proptest! {
     }
 }
 
-/// A recording of `cuts` cuts of a growing graph, in one file.
-fn growing_recording(cuts: u64) -> tempfile::TempDir {
+/// A recording of `cuts` cuts of a growing graph (one file with the default options).
+fn growing_recording(cuts: u64, options: RecordingOptions) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    let mut w = RecordingWriter::create(dir.path(), RecordingOptions::default()).unwrap();
+    let mut w = RecordingWriter::create(dir.path(), options).unwrap();
     let mut g = seeded_graph(8);
     let mut p = published::Publisher::new();
     let layer = g.layers().next().unwrap();
@@ -187,7 +187,7 @@ fn only_file(dir: &std::path::Path) -> std::path::PathBuf {
 
 #[test]
 fn a_torn_tail_is_ignored_at_every_length() {
-    let dir = growing_recording(6);
+    let dir = growing_recording(6, RecordingOptions::default());
     let path = only_file(dir.path());
     let whole = std::fs::read(&path).unwrap();
     let full = Recording::open(dir.path()).unwrap();
@@ -228,7 +228,7 @@ fn a_torn_tail_is_ignored_at_every_length() {
 
 #[test]
 fn damaged_bytes_give_errors_or_fewer_cuts_never_a_wrong_scene() {
-    let dir = growing_recording(5);
+    let dir = growing_recording(5, RecordingOptions::default());
     let path = only_file(dir.path());
     let whole = std::fs::read(&path).unwrap();
     for at in (0..whole.len()).step_by(13) {
@@ -250,27 +250,26 @@ fn damaged_bytes_give_errors_or_fewer_cuts_never_a_wrong_scene() {
 
 #[test]
 fn bounds_drop_whole_old_files_and_what_stays_opens() {
-    let dir = tempfile::tempdir().unwrap();
     let options = RecordingOptions {
         file_bytes: 4096,
         max_bytes: Some(1),
         max_age: None,
     };
-    let mut w = RecordingWriter::create(dir.path(), options).unwrap();
-    let mut g = seeded_graph(8);
-    let mut p = published::Publisher::new();
-    let layer = g.layers().next().unwrap();
-    for i in 0..40 {
-        g.add_node(NodeId(90_000 + i), layer).unwrap();
-        record(&mut p, &mut g, &mut w, i + 1);
-    }
-    drop(w);
     // A bound of one byte keeps only the file being written.
+    assert_only_the_newest_file_is_left(&growing_recording(40, options), 40);
+}
+
+/// Asserts that the recording in `dir` of `cuts` cuts of [`growing_recording`] holds one
+/// file, whose last cut opens with every node.
+fn assert_only_the_newest_file_is_left(dir: &tempfile::TempDir, cuts: u64) {
     let rec = Recording::open(dir.path()).unwrap();
     assert_eq!(rec.files().count(), 1);
     let last = rec.cuts().len() - 1;
-    assert_eq!(rec.cuts()[last].generation, 40);
-    assert_eq!(rec.scene(last).unwrap().view().node_count(), 8 + 40);
+    assert_eq!(rec.cuts()[last].generation, cuts);
+    assert_eq!(
+        rec.scene(last).unwrap().view().node_count(),
+        8 + cuts as usize
+    );
 }
 
 #[test]
@@ -288,25 +287,11 @@ fn a_folder_that_is_not_a_recording_is_refused_with_its_name() {
 
 #[test]
 fn an_age_bound_drops_files_whose_newest_cut_is_older() {
-    let dir = tempfile::tempdir().unwrap();
     let options = RecordingOptions {
         file_bytes: 4096,
         max_bytes: None,
         max_age: Some(std::time::Duration::from_nanos(1)),
     };
-    let mut w = RecordingWriter::create(dir.path(), options).unwrap();
-    let mut g = seeded_graph(8);
-    let mut p = published::Publisher::new();
-    let layer = g.layers().next().unwrap();
-    for i in 0..20 {
-        g.add_node(NodeId(90_000 + i), layer).unwrap();
-        record(&mut p, &mut g, &mut w, i + 1);
-    }
-    drop(w);
     // Every closed file is older than a nanosecond: only the one being written is left.
-    let rec = Recording::open(dir.path()).unwrap();
-    assert_eq!(rec.files().count(), 1);
-    let last = rec.cuts().len() - 1;
-    assert_eq!(rec.cuts()[last].generation, 20);
-    assert_eq!(rec.scene(last).unwrap().view().node_count(), 8 + 20);
+    assert_only_the_newest_file_is_left(&growing_recording(20, options), 20);
 }

@@ -206,11 +206,19 @@ fn recorded_cuts_are_the_published_graphs_and_replay_republishes_them() {
         .open()
         .expect("reader");
     let mut seen = 0;
+    let started = std::time::Instant::now();
     loop {
         let snapshot = reader
             .wait_next(Duration::from_secs(20))
             .expect("receive")
             .expect("a replayed cut within 20 s");
+        assert!(
+            started.elapsed() < Duration::from_secs(30),
+            "stuck at generation {} of {last_generation}; player: {:?} {:?}",
+            snapshot.generation(),
+            replay.stdout(),
+            replay.stderr()
+        );
         assert_eq!(
             &layer_fingerprints(snapshot.view(), true),
             &expected[&snapshot.generation()],

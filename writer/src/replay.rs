@@ -220,13 +220,12 @@ impl RecordingPlayer {
 /// overshoot by tens of microseconds (more on a busy machine), a spin does not.
 const SPIN_BEFORE_DUE: Duration = Duration::from_micros(1500);
 
-/// Waits until `due`: sleeps on the publisher's node (so SIGINT/SIGTERM end the wait)
-/// until shortly before it, then spins.
+/// Waits until `due`: sleeps on the publisher's node until shortly before it, then
+/// spins. The node's wait runs before every cut, even a zero one, so that SIGINT/SIGTERM
+/// (whose handler its first call installs) end a play of cuts that are always due.
 fn wait_until(publisher: &SegmentPublisher, due: Instant) -> Result<(), WriterWaitError> {
     let now = Instant::now();
-    if due > now + SPIN_BEFORE_DUE {
-        publisher.wait(due - now - SPIN_BEFORE_DUE)?;
-    }
+    publisher.wait(due.saturating_duration_since(now + SPIN_BEFORE_DUE))?;
     while Instant::now() < due {
         std::hint::spin_loop();
     }
