@@ -7,7 +7,7 @@ use std::path::Path;
 
 use ygg_dsg::office::{OfficeParams, generate};
 use ygg_store::recording::{CutToRecord, RecordedSegment, Recording, RecordingOptions, RecordingWriter};
-use ygg_store::{FeatureValue, NodeId, SceneGraph};
+use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView};
 use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, part_segment_id};
 use ygg_transport::ManifestEntry;
 use ygg_transport::protocol::{
