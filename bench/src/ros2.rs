@@ -172,7 +172,6 @@ impl Side {
 pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     let load_before = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     let link = VethLink::create("yb")?;
-    link.route_multicast(0)?;
     let dir = tempfile::tempdir()?;
     let config = dir.path().join("cyclonedds.xml");
     let internal = args.cyclone_whc_high.as_ref().map_or(String::new(), |w| {
@@ -180,11 +179,11 @@ pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     });
     std::fs::write(
         &config,
-        format!(
-            "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface \
-             name=\"{}\"/></Interfaces>{}</General>{internal}</Domain></CycloneDDS>",
-            link.interface(0),
-            args.cyclone_general.as_deref().unwrap_or_default()
+        link.cyclone_unicast_config(
+            0,
+            &[link.address(0)],
+            args.cyclone_general.as_deref().unwrap_or_default(),
+            &internal,
         ),
     )?;
     let office = generate(OfficeParams {

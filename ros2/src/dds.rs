@@ -15,6 +15,7 @@ use rustdds::{
 };
 
 use crate::message::{CdrError, DsgUpdate, Encoding};
+use crate::receive_buffers;
 
 /// The DDS type name of `hydra_msgs/msg/DsgUpdate` (ROS 2's `<pkg>::msg::dds_::<Msg>_`).
 pub const TYPE_NAME: &str = "hydra_msgs::msg::dds_::DsgUpdate_";
@@ -106,18 +107,26 @@ fn create<T>(what: &'static str, r: Result<T, impl std::fmt::Display>) -> Result
     })
 }
 
-/// A domain participant and the DsgUpdate topic on it.
-fn topic(domain: u16, ros_topic: &str) -> Result<(DomainParticipant, Topic), Ros2Error> {
+/// A domain participant, the DsgUpdate topic on it, and the smallest receive buffer of
+/// its UDP sockets after [`receive_buffers::enlarge`] (`None`: none found).
+fn topic(
+    domain: u16,
+    ros_topic: &str,
+) -> Result<(DomainParticipant, Topic, Option<usize>), Ros2Error> {
     if domain > 232 {
         return Err(Ros2Error::Domain(domain));
     }
     let name = dds_topic_name(ros_topic)?;
+    // RustDDS opens the participant's sockets in `new`: the descriptors new after it.
+    let before = receive_buffers::open_fds();
     let participant = create("domain participant", DomainParticipant::new(domain))?;
+    let receive_buffer =
+        receive_buffers::enlarge(receive_buffers::open_fds().difference(&before).copied());
     let topic = create(
         "topic",
         participant.create_topic(name, TYPE_NAME.to_owned(), &hydra_qos(), TopicKind::NoKey),
     )?;
-    Ok((participant, topic))
+    Ok((participant, topic, receive_buffer))
 }
 
 /// One sample as received: a message, or why its bytes are not one.
@@ -190,6 +199,7 @@ pub struct DsgUpdateSubscriber {
     poll: mio_08::Poll,
     events: mio_08::Events,
     reader: DataReader<Received, DsgUpdateCdr>,
+    receive_buffer: Option<usize>,
     _participant: DomainParticipant,
 }
 
@@ -199,7 +209,7 @@ impl DsgUpdateSubscriber {
     /// # Errors
     /// A bad topic name or domain id, or an entity RustDDS could not create.
     pub fn new(domain: u16, ros_topic: &str) -> Result<Self, Ros2Error> {
-        let (participant, topic) = topic(domain, ros_topic)?;
+        let (participant, topic, receive_buffer) = topic(domain, ros_topic)?;
         let subscriber = create(
             "subscriber",
             participant.create_subscriber(&qos(READER_DEPTH)),
@@ -221,8 +231,17 @@ impl DsgUpdateSubscriber {
             poll,
             events: mio_08::Events::with_capacity(4),
             reader,
+            receive_buffer,
             _participant: participant,
         })
+    }
+
+    /// The smallest receive buffer of the participant's UDP sockets, in the kernel's
+    /// count (twice what it granted); `None` when they could not be found. Below
+    /// [`RECEIVE_BUFFER_BYTES`](crate::RECEIVE_BUFFER_BYTES)` * 2`, `net.core.rmem_max`
+    /// capped it: large graphs then arrive slower (lost fragments are sent again).
+    pub fn receive_buffer_bytes(&self) -> Option<usize> {
+        self.receive_buffer
     }
 
     /// Every message already received, oldest first, waiting up to `timeout` for the first
@@ -275,7 +294,7 @@ impl DsgUpdatePublisher {
     /// # Errors
     /// A bad topic name or domain id, or an entity RustDDS could not create.
     pub fn new(domain: u16, ros_topic: &str) -> Result<Self, Ros2Error> {
-        let (participant, topic) = topic(domain, ros_topic)?;
+        let (participant, topic, _) = topic(domain, ros_topic)?;
         let publisher = create("publisher", participant.create_publisher(&hydra_qos()))?;
         let writer = create(
             "data writer",

@@ -8,12 +8,16 @@
 //! (crate `ygg-cli`) are its users. The crate knows no Spark-DSG and no shared memory:
 //! `layer_contents` stays bytes here.
 //!
-//! Discovery is RustDDS's: SPDP over UDP multicast (239.255.0.1) on every non-loopback
-//! interface, as a ROS 2 node with its default rmw settings does; RustDDS 0.11 has no
-//! unicast-only peer list, so the tests run it in a network namespace they create.
+//! Discovery is RustDDS's: SPDP announced on UDP multicast (239.255.0.1) on every
+//! non-loopback interface, as a ROS 2 node with its default rmw settings does, and answered
+//! by unicast to a participant heard from; RustDDS 0.11 has no peer list of its own, so the
+//! tests give Cyclone DDS the bridge as its unicast peer, in a network namespace they
+//! create. The participant's UDP sockets get larger receive buffers
+//! ([`RECEIVE_BUFFER_BYTES`]) than RustDDS gives them.
 
 mod dds;
 mod message;
+mod receive_buffers;
 
 #[doc(inline)]
 pub use self::dds::{
@@ -22,3 +26,5 @@ pub use self::dds::{
 };
 #[doc(inline)]
 pub use self::message::{CdrError, DsgUpdate, Encoding, Header, Time};
+#[doc(inline)]
+pub use self::receive_buffers::RECEIVE_BUFFER_BYTES;

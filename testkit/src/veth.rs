@@ -111,23 +111,31 @@ impl VethLink {
         command
     }
 
-    /// Routes multicast (224.0.0.0/4) out of host `side`'s end of the link, for a DDS
-    /// stack that discovers peers by multicast only (RustDDS) and skips the loopback
-    /// interface: the processes of that host then find each other there, and the
-    /// datagrams go no further than the other namespace of the pair.
-    ///
-    /// # Errors
-    /// The `ip` command's failure.
-    pub fn route_multicast(&self, side: usize) -> Result<(), String> {
-        ip(&[
-            "-n",
-            &self.ns[side],
-            "route",
-            "add",
-            "224.0.0.0/4",
-            "dev",
-            &self.veth[side],
-        ])
+    /// A Cyclone DDS configuration (the `CYCLONEDDS_URI` XML) for a participant on host
+    /// `side` that discovers by unicast only: bound to host `side`'s end of the link,
+    /// multicast off, its peers the unicast ports of `peers` (Cyclone tries participant
+    /// indices 0 to 9 at each address), announced to them every second (Cyclone's default
+    /// is 30 s: a RustDDS participant started after this one, which announces itself by
+    /// multicast only, would wait that long to be found). `general` and `domain` add XML
+    /// inside `<General>` and `<Domain>` (tuning: fragment sizes, watermarks).
+    pub fn cyclone_unicast_config(
+        &self,
+        side: usize,
+        peers: &[&str],
+        general: &str,
+        domain: &str,
+    ) -> String {
+        let peers: String = peers
+            .iter()
+            .map(|a| format!("<Peer address=\"{a}\"/>"))
+            .collect();
+        format!(
+            "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface \
+             name=\"{}\" multicast=\"false\"/></Interfaces><AllowMulticast>false</AllowMulticast>\
+             {general}</General><Discovery><ParticipantIndex>auto</ParticipantIndex><SPDPInterval>1s</SPDPInterval><Peers>{peers}\
+             </Peers></Discovery>{domain}</Domain></CycloneDDS>",
+            self.veth[side]
+        )
     }
 
     /// The name of host `side`'s end of the link (the interface to bind a stack to).

@@ -12,9 +12,12 @@
 //! a Cyclone DDS subscriber receives it, spark_dsg decodes every message's body, and the
 //! full update then each incremental one applied give back the graph Hydra's side sent.
 //!
-//! RustDDS discovers peers by multicast only, on non-loopback interfaces: the bridge and the
-//! peer run in a network namespace the test creates (one end of a veth pair, multicast
-//! routed to it; `ygg_testkit::VethLink`) and removes. They need root and `ip`, as in CI;
+//! Discovery is by unicast: Cyclone DDS runs with multicast off and the bridge's address as
+//! its peer; RustDDS answers a participant it hears from on that participant's unicast
+//! locators. RustDDS announces itself on a multicast group too (it has no setting to stop
+//! that) and uses non-loopback interfaces only, so the bridge and the peer run in a network
+//! namespace the test creates (one end of a veth pair, no multicast route;
+//! `ygg_testkit::VethLink`) and removes. They need root and `ip`, as in CI;
 //! `YGG_SKIP_NETNS_TESTS=1` skips them where that is impossible.
 
 mod bridge_common;
@@ -37,8 +40,8 @@ const WATCHDOG: Duration = Duration::from_secs(300);
 const TOPIC: &str = "/hydra/backend/dsg";
 const DOMAIN: &str = "42";
 
-/// The namespace (host 0 of a veth pair), with multicast routed to its end, and the
-/// Cyclone DDS configuration binding the peer to that interface.
+/// The namespace (host 0 of a veth pair) and the Cyclone DDS configuration binding the
+/// peer to its end, discovering by unicast only.
 struct Host {
     link: VethLink,
     _dir: tempfile::TempDir,
@@ -48,16 +51,11 @@ struct Host {
 impl Host {
     fn create() -> Option<Self> {
         let link = VethLink::create_for_test("y2")?;
-        link.route_multicast(0).unwrap_or_else(|e| panic!("{e}"));
         let dir = tempfile::tempdir().expect("tempdir");
         let config = dir.path().join("cyclonedds.xml");
         std::fs::write(
             &config,
-            format!(
-                "<CycloneDDS><Domain Id=\"any\"><General><Interfaces>\
-                 <NetworkInterface name=\"{}\"/></Interfaces></General></Domain></CycloneDDS>",
-                link.interface(0)
-            ),
+            link.cyclone_unicast_config(0, &[link.address(0)], "", ""),
         )
         .expect("write the Cyclone DDS configuration");
         Some(Self {

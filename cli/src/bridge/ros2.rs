@@ -77,11 +77,23 @@ pub fn run(args: &Ros2Args) -> Result<(), Box<dyn std::error::Error>> {
     let domain_id = domain_id(args.domain_id)?;
     let dds_topic = ygg_ros2::dds_topic_name(&args.topic)?;
     let mut subscriber = DsgUpdateSubscriber::new(domain_id, &args.topic)?;
+    let receive_buffer = subscriber.receive_buffer_bytes();
     println!(
         "{}",
         serde_json::json!({"event": "subscribed", "topic": args.topic, "dds_topic": dds_topic,
-            "type": ygg_ros2::TYPE_NAME, "domain_id": domain_id})
+            "type": ygg_ros2::TYPE_NAME, "domain_id": domain_id,
+            "receive_buffer_bytes": receive_buffer})
     );
+    if receive_buffer.is_some_and(|n| n < ygg_ros2::RECEIVE_BUFFER_BYTES) {
+        eprintln!(
+            "ygg bridge ros2: warning: the DDS sockets' receive buffers are {} bytes \
+             (net.core.rmem_max caps them; {} asked for): large updates will arrive slower. \
+             Raise it (sysctl -w net.core.rmem_max={}) or run with CAP_NET_ADMIN.",
+            receive_buffer.unwrap_or_default(),
+            ygg_ros2::RECEIVE_BUFFER_BYTES,
+            ygg_ros2::RECEIVE_BUFFER_BYTES
+        );
+    }
     let stop = loop {
         if let Some(why) = scene.stopped() {
             break why;

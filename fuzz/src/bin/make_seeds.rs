@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use ygg_dsg::office::{OfficeParams, generate};
+use ygg_ros2::DsgUpdate;
 use ygg_store::recording::{CutToRecord, RecordedSegment, Recording, RecordingOptions, RecordingWriter};
 use ygg_store::{FeatureValue, NodeId, SceneGraph, SceneView};
 use ygg_store::snapshot::{STRUCTURE_SEGMENT_ID, part_segment_id};
@@ -162,6 +163,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     write("dsg_json", "office.json", &ygg_dsg::to_json_bytes(&office))?;
     write("dsg_binary", "office.sparkdsg", &ygg_dsg::to_binary_bytes(&office)?)?;
     write("dsg_binary", "office.body", &ygg_dsg::to_binary_body(&office)?)?;
+
+    // dsg_update: the pick byte 1 is plain CDR, little-endian (what rmw sends).
+    let full = DsgUpdate {
+        layer_contents: ygg_dsg::to_binary_body(&office)?,
+        full_update: true,
+        ..DsgUpdate::default()
+    };
+    let mut moved = office.clone();
+    moved.nodes[3].position[2] += 0.5;
+    let step = ygg_dsg::update_between(&office, &moved);
+    let incremental = DsgUpdate {
+        layer_contents: ygg_dsg::to_binary_body(&step.part)?,
+        deleted_nodes: vec![office.nodes[5].id],
+        deleted_edges: step.deleted_edges,
+        sequence_number: 1,
+        ..DsgUpdate::default()
+    };
+    for (name, message) in [("full", full), ("incremental", incremental)] {
+        write("dsg_update", name, &[&[1], &message.to_cdr()[..]].concat())?;
+    }
 
     for (name, line) in [
         ("nearest", r#"{"op":"nearest_object","point":[5,5,1]}"#),
