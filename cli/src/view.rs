@@ -38,7 +38,7 @@ pub enum ViewStartError {
     /// The interpreter runs but cannot import the viewer.
     #[error(
         "{python} cannot import the viewer (yggdrasil.view with viser): install the Python package with its `view` extra, \
-         `pip install './python[view]'` (or `pip install viser` beside an installed yggdrasil); {python} said: {said}"
+         `pip install './python[view]'` (or `pip install viser pygltflib` beside an installed yggdrasil); {python} said: {said}"
     )]
     NotInstalled {
         /// The interpreter tried.

@@ -45,6 +45,33 @@ def small_graph():
     return g
 
 
+
+def test_line_drawings_are_gltf_line_lists_with_every_segment_and_color():
+    """The GLB the viewer sends for a layer's edges, boxes and nesting lines holds one
+    LINES primitive whose vertices are the segments' ends and whose colors are theirs."""
+    import pygltflib
+
+    from yggdrasil.view.lines import line_segments_glb
+
+    segments = np.array([[[0, 0, 0], [1, 2, 3]], [[4, 5, 6], [-1, -2, -3]], [[7, 7, 7], [8, 8, 8]]], np.float32)
+    colors = np.array([[255, 0, 0], [0, 255, 0], [1, 2, 3]], np.uint8)
+    doc = pygltflib.GLTF2.load_from_bytes(line_segments_glb(segments, colors))
+    (primitive,) = doc.meshes[0].primitives
+    assert primitive.mode == pygltflib.LINES
+    blob = doc.binary_blob()
+    pos_view = doc.bufferViews[doc.accessors[primitive.attributes.POSITION].bufferView]
+    col_view = doc.bufferViews[doc.accessors[primitive.attributes.COLOR_0].bufferView]
+    positions = np.frombuffer(blob, np.float32, 6 * 3, pos_view.byteOffset).reshape(3, 2, 3)
+    rgba = np.frombuffer(blob, np.uint8, 6 * 4, col_view.byteOffset).reshape(3, 2, 4)
+    np.testing.assert_array_equal(positions, segments)
+    np.testing.assert_array_equal(rgba[..., :3], np.repeat(colors[:, None, :], 2, axis=1))
+    assert (rgba[..., 3] == 255).all()
+    assert doc.accessors[primitive.attributes.POSITION].min == [-1.0, -2.0, -3.0]
+    one_color = pygltflib.GLTF2.load_from_bytes(line_segments_glb(segments, np.array([9, 8, 7], np.uint8)))
+    col_view = one_color.bufferViews[one_color.accessors[1].bufferView]
+    rgba = np.frombuffer(one_color.binary_blob(), np.uint8, 6 * 4, col_view.byteOffset).reshape(6, 4)
+    assert (rgba[:, :3] == [9, 8, 7]).all()
+
 def test_a_layer_role_comes_from_its_name():
     assert role_of("OBJECTS") == "objects"
     assert role_of("room:7/claimed-mesh") == "mesh"

@@ -265,8 +265,7 @@ def write_report(out: pathlib.Path, r: dict, args) -> None:
         "",
         f"`python3 -m yggdrasil.view.bench` on {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
         f"{m['cpu']}, {m['cores']} cores, load average {m['loadavg']} at the start; Python {m['python']}, "
-        f"viser {m['viser']}, {m['chromium']} headless with software WebGL (no GPU). Other engineers' builds "
-        "shared the 2 cores during the run.",
+        f"viser {m['viser']}, {m['chromium']} headless with software WebGL (no GPU).",
         "",
         "| target | measured | target | verdict |",
         "|---|---|---|---|",

@@ -74,7 +74,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         from .viewer import SceneViewer
     except ImportError as e:
         print(f"ygg view: the viewer needs the package extra `view` ({e}): pip install 'yggdrasil[view]' "
-              "(or pip install viser)", file=sys.stderr)
+              "(or pip install viser pygltflib)", file=sys.stderr)
         return 2
 
     stop = threading.Event()

@@ -14,6 +14,7 @@ import numpy as np
 import viser
 
 from .drawing import DrawingUpdate, SceneDrawing
+from .lines import line_segments_glb
 from .queries import QueryDrawing, answer, parse_query
 from .sources import ColoredMesh, Timeline
 from .style import ROLE_COLORS, Style
@@ -22,7 +23,7 @@ HIGHLIGHT = (255, 215, 0)
 SELECTED = (255, 0, 255)
 QUERY_SHAPE = (230, 0, 60)
 PARTS = ("nodes", "edges", "nesting", "boxes", "mesh")
-# Intra-layer edges take their role's node color (the agent's trajectory red, thicker).
+# Intra-layer edges take their role's node color (the agent's trajectory red, wide).
 ROLE_COLORS_EDGE = {role: ROLE_COLORS[role] for role in ("agents", "places", "rooms", "objects")}
 
 
@@ -163,8 +164,17 @@ class SceneViewer:
             return
         self._put(name, kind, self.server.scene.add_point_cloud(path, points, np.ascontiguousarray(colors), **props))
 
-    def _lines(self, name: str, kind: str, path: str, segments: np.ndarray, colors, **props) -> None:
-        """Draws line segments, updated in place like ``_cloud``."""
+    def _lines(self, name: str, kind: str, path: str, segments: np.ndarray, colors, thickness: Optional[float] = None,
+               visible: bool = True) -> None:
+        """Draws line segments: one-pixel lines (a GLB of GL lines, ``lines.py``: cheap for
+        the many edges, boxes and nesting lines of a layer), or viser's wide lines of
+        ``thickness`` screen pixels (few segments: the agent's trajectory), updated in
+        place like ``_cloud``."""
+        if thickness is None:
+            glb = line_segments_glb(segments, colors)
+            self._put(name, kind, self.server.scene.add_glb(path, glb, visible=visible, cast_shadow=False,
+                                                            receive_shadow=False))
+            return
         colors = np.ascontiguousarray(np.broadcast_to(np.asarray(colors, np.uint8).reshape(-1, 1, 3)
                                                       if np.ndim(colors) == 2 else np.asarray(colors, np.uint8),
                                                       (len(segments), 2, 3)))
@@ -173,7 +183,8 @@ class SceneViewer:
             handle.points = np.asarray(segments, np.float32)
             handle.colors = colors
             return
-        self._put(name, kind, self.server.scene.add_line_segments(path, segments, colors, **props))
+        self._put(name, kind, self.server.scene.add_line_segments(path, segments, colors, thickness=thickness,
+                                                                  thickness_units="screen", visible=visible))
 
     def _drop(self, name: str, kind: str) -> None:
         handle = self._handles.pop((name, kind), None)
@@ -192,18 +203,14 @@ class SceneViewer:
         else:
             self._drop(name, "nodes")
         if len(d.edges):
-            width = 4.0 if d.role == "agents" else 1.5
             self._lines(
-                name, "edges", f"{base}/edges", d.edges, ROLE_COLORS_EDGE.get(d.role, (60, 60, 60)), thickness=width,
-                thickness_units="screen", visible=self._visible(d.role, "edges"),
+                name, "edges", f"{base}/edges", d.edges, ROLE_COLORS_EDGE.get(d.role, (60, 60, 60)),
+                thickness=4.0 if d.role == "agents" else None, visible=self._visible(d.role, "edges"),
             )
         else:
             self._drop(name, "edges")
         if len(d.boxes):
-            self._lines(
-                name, "boxes", f"{base}/boxes", d.boxes, d.box_colors, thickness=1.5, thickness_units="screen",
-                visible=self._visible(d.role, "boxes"),
-            )
+            self._lines(name, "boxes", f"{base}/boxes", d.boxes, d.box_colors, visible=self._visible(d.role, "boxes"))
         else:
             self._drop(name, "boxes")
         if len(d.mesh_points) and self._file_mesh is None:
@@ -220,10 +227,8 @@ class SceneViewer:
         if segs is None or not len(segs):
             self._drop(name, "nesting")
             return
-        self._lines(
-            name, "nesting", f"/{d.role}/{_safe(name)}/nesting", segs, (200, 200, 200), thickness=1.0,
-            thickness_units="screen", visible=self._visible(d.role, "nesting"),
-        )
+        self._lines(name, "nesting", f"/{d.role}/{_safe(name)}/nesting", segs, (200, 200, 200),
+                    visible=self._visible(d.role, "nesting"))
 
     def _send_file_mesh(self) -> None:
         self._drop("<file>", "mesh")
