@@ -2,8 +2,9 @@
 //! office in mint layout with [`SlamReplay`], as `ygg serve` and `ygg demo` publish it).
 //!
 //! 1. **Paired publish cost**: the writer ticks at `--rate` for `--pair-minutes` while a
-//!    `ygg record` process is attached in every other `--toggle-seconds` window;
-//!    `publish()` per tick with and without a recorder, from the same run.
+//!    `ygg record` process, a plain reader (`ygg watch`) or nothing is attached, in turn,
+//!    per `--toggle-seconds` window; `publish()` per tick with a recorder against
+//!    nothing and against a plain reader, from the same run.
 //! 2. **A mission's recording**: the writer ticks for `--minutes` with a recorder
 //!    attached throughout; the recording's size against the bytes the writer published
 //!    for the cuts it holds.
@@ -39,7 +40,7 @@ pub struct RecordArgs {
     /// Minutes of the paired publish measurement (phase 1).
     #[arg(long, default_value_t = 10.0)]
     pair_minutes: f64,
-    /// Seconds of each window of phase 1 (recorder attached in every other one).
+    /// Seconds of each window of phase 1 (nothing, a recorder, a plain reader attached, in turn).
     #[arg(long, default_value_t = 30.0)]
     toggle_seconds: f64,
     /// Ticks per second.
@@ -64,9 +65,21 @@ struct Tick {
     publish_ns: f64,
     bytes: usize,
     generation: u64,
-    recorder: bool,
-    /// Whether the tick is within 2 s after the recorder was attached or detached.
+    attached: Attached,
+    /// Whether the tick is within 2 s after a process was attached or detached.
     settling: bool,
+}
+
+/// What follows the scene during a window of phase 1.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Attached {
+    /// No process: the baseline.
+    Nothing,
+    /// `ygg record`.
+    Recorder,
+    /// `ygg watch`: a reader that validates each snapshot and writes nothing, to tell
+    /// what any subscriber costs the writer from what recording adds.
+    Reader,
 }
 
 /// The demo's writer and stream, ticked at a fixed rate.
@@ -99,7 +112,11 @@ impl Stream {
     }
 
     /// Waits for the next tick's time, applies one step of the stream and publishes it.
-    fn tick(&mut self, recorder: bool, settling: bool) -> Result<Tick, Box<dyn std::error::Error>> {
+    fn tick(
+        &mut self,
+        attached: Attached,
+        settling: bool,
+    ) -> Result<Tick, Box<dyn std::error::Error>> {
         let now = Instant::now();
         if self.next > now {
             std::thread::sleep(self.next - now);
@@ -112,7 +129,7 @@ impl Stream {
             publish_ns: t.elapsed().as_nanos() as f64,
             bytes: report.bytes_sent,
             generation: report.generation,
-            recorder,
+            attached,
             settling,
         })
     }
@@ -138,6 +155,27 @@ fn start_recorder(scene: &TestScene, dir: &std::path::Path, watchdog: &Watchdog)
         l.contains("\"event\":\"ready\"")
     });
     recorder
+}
+
+/// Starts `ygg watch` on `scene` (a plain reader) and waits for its first snapshot line.
+fn start_reader(scene: &TestScene, watchdog: &Watchdog) -> Proc {
+    let reader = Proc::spawn(
+        scene.command("ygg", &["watch", "--scene", &scene.name]),
+        "reader",
+        watchdog,
+    );
+    reader.expect_line(Duration::from_secs(30), |l| l.contains("generation"));
+    reader
+}
+
+/// Stops a plain reader with SIGTERM.
+fn stop_reader(mut reader: Proc) -> Result<(), String> {
+    reader.signal(Signal::TERM);
+    if reader.wait_exit(Duration::from_secs(30)).success() {
+        Ok(())
+    } else {
+        Err(format!("the reader failed: {}", reader.stderr().join("\n")))
+    }
 }
 
 /// Stops a recorder with SIGTERM and returns its summary line.
@@ -180,26 +218,39 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut pair = Vec::new();
     let start = Instant::now();
     let mut window = 0usize;
-    let mut recorder = None;
+    let mut follower: Option<(Attached, Proc)> = None;
     let mut toggled = Instant::now();
     while start.elapsed().as_secs_f64() < args.pair_minutes * 60.0 {
         let w = (start.elapsed().as_secs_f64() / args.toggle_seconds) as usize;
         if w != window || (w == 0 && pair.is_empty()) {
             window = w;
             toggled = Instant::now();
-            if let Some(r) = recorder.take() {
-                stop_recorder(r)?;
+            match follower.take() {
+                Some((Attached::Recorder, r)) => {
+                    stop_recorder(r)?;
+                }
+                Some((_, reader)) => stop_reader(reader)?,
+                None => {}
             }
-            if w % 2 == 1 {
-                let dir = args.dir.join(format!("pair{w}.yggrec"));
-                recorder = Some(start_recorder(&scene, &dir, &watchdog));
-            }
+            follower = match w % 3 {
+                1 => {
+                    let dir = args.dir.join(format!("pair{w}.yggrec"));
+                    Some((Attached::Recorder, start_recorder(&scene, &dir, &watchdog)))
+                }
+                2 => Some((Attached::Reader, start_reader(&scene, &watchdog))),
+                _ => None,
+            };
         }
         let settling = toggled.elapsed() < Duration::from_secs(2);
-        pair.push(stream.tick(recorder.is_some(), settling)?);
+        let attached = follower.as_ref().map_or(Attached::Nothing, |(a, _)| *a);
+        pair.push(stream.tick(attached, settling)?);
     }
-    if let Some(r) = recorder.take() {
-        stop_recorder(r)?;
+    match follower.take() {
+        Some((Attached::Recorder, r)) => {
+            stop_recorder(r)?;
+        }
+        Some((_, reader)) => stop_reader(reader)?,
+        None => {}
     }
     for w in 0..=window {
         let _ = std::fs::remove_dir_all(args.dir.join(format!("pair{w}.yggrec")));
@@ -213,7 +264,7 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let mut last_note = start;
     while start.elapsed().as_secs_f64() < args.minutes * 60.0 {
-        mission.push(stream.tick(true, false)?);
+        mission.push(stream.tick(Attached::Recorder, false)?);
         if last_note.elapsed() > Duration::from_secs(60) {
             last_note = Instant::now();
             eprintln!(
@@ -239,22 +290,30 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
     let published: Vec<(u64, usize)> = mission.iter().map(|t| (t.generation, t.bytes)).collect();
     let read = readback::measure(&path, &scene, &published, args.replay_seconds)?;
 
-    let settled = |on: bool| -> Vec<f64> {
+    let settled = |which: Attached| -> Vec<f64> {
         pair.iter()
-            .filter(|t| t.recorder == on && !t.settling)
+            .filter(|t| t.attached == which && !t.settling)
             .map(|t| t.publish_ns)
             .collect()
     };
-    let (off, on) = (us(&settled(false)), us(&settled(true)));
+    let (off, on, reader) = (
+        us(&settled(Attached::Nothing)),
+        us(&settled(Attached::Recorder)),
+        us(&settled(Attached::Reader)),
+    );
     let mission_publish = us(&mission.iter().map(|t| t.publish_ns).collect::<Vec<_>>());
     let report = json!({
         "machine": machine,
         "rate_hz": args.rate,
         "paired": {"minutes": args.pair_minutes, "toggle_seconds": args.toggle_seconds,
-            "ticks_without": settled(false).len(), "ticks_with": settled(true).len(),
+            "ticks_without": settled(Attached::Nothing).len(),
+            "ticks_with": settled(Attached::Recorder).len(),
+            "ticks_with_reader": settled(Attached::Reader).len(),
             "publish_us_without": {"median": off.0, "p99": off.1},
             "publish_us_with": {"median": on.0, "p99": on.1},
-            "median_ratio": on.0 / off.0},
+            "publish_us_with_reader": {"median": reader.0, "p99": reader.1},
+            "median_ratio": on.0 / off.0,
+            "median_ratio_to_reader": on.0 / reader.0},
         "mission": {"minutes": args.minutes, "ticks": mission.len(),
             "publish_us": {"median": mission_publish.0, "p99": mission_publish.1},
             "recorder_summary": serde_json::from_str::<Value>(&summary).unwrap_or(Value::Null)},

@@ -271,6 +271,17 @@ pub fn markdown(r: &Value) -> String {
         f(&p["publish_us_without"]["p99"]),
         yes(pr <= 1.1)
     );
+    if p.get("publish_us_with_reader").is_some() {
+        s += &format!(
+            "| (the same, a recorder against a plain reader, `ygg watch`, attached: what recording adds to what any subscriber costs) | {:.1} µs vs {:.1} µs median ({:.3}×); p99 {:.1} vs {:.1} µs | {} |\n",
+            f(&p["publish_us_with"]["median"]),
+            f(&p["publish_us_with_reader"]["median"]),
+            f(&p["median_ratio_to_reader"]),
+            f(&p["publish_us_with"]["p99"]),
+            f(&p["publish_us_with_reader"]["p99"]),
+            yes(f(&p["median_ratio_to_reader"]) <= 1.1)
+        );
+    }
     let worst = f(&o["first_cut_ms"])
         .max(f(&o["last_cut_ms"]))
         .max(f(&o["middle_cut_ms"]));
