@@ -45,7 +45,6 @@ def small_graph():
     return g
 
 
-
 def test_line_drawings_are_gltf_line_lists_with_every_segment_and_color():
     """The GLB the viewer sends for a layer's edges, boxes and nesting lines holds one
     LINES primitive whose vertices are the segments' ends and whose colors are theirs."""
@@ -71,6 +70,7 @@ def test_line_drawings_are_gltf_line_lists_with_every_segment_and_color():
     col_view = one_color.bufferViews[one_color.accessors[1].bufferView]
     rgba = np.frombuffer(one_color.binary_blob(), np.uint8, 6 * 4, col_view.byteOffset).reshape(6, 4)
     assert (rgba[:, :3] == [9, 8, 7]).all()
+
 
 def test_a_layer_role_comes_from_its_name():
     assert role_of("OBJECTS") == "objects"

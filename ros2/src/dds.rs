@@ -236,10 +236,10 @@ impl DsgUpdateSubscriber {
         })
     }
 
-    /// The smallest receive buffer of the participant's UDP sockets, in the kernel's
-    /// count (twice what it granted); `None` when they could not be found. Below
-    /// [`RECEIVE_BUFFER_BYTES`](crate::RECEIVE_BUFFER_BYTES)` * 2`, `net.core.rmem_max`
-    /// capped it: large graphs then arrive slower (lost fragments are sent again).
+    /// The smallest receive buffer granted to the participant's UDP sockets; `None` when
+    /// they could not be found. Below [`RECEIVE_BUFFER_BYTES`](crate::RECEIVE_BUFFER_BYTES),
+    /// `net.core.rmem_max` capped it: large graphs then arrive slower (lost fragments are
+    /// sent again).
     pub fn receive_buffer_bytes(&self) -> Option<usize> {
         self.receive_buffer
     }

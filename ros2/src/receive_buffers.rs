@@ -31,8 +31,9 @@ pub(crate) fn open_fds() -> BTreeSet<RawFd> {
 }
 
 /// Asks every UDP socket among `fds` for a [`RECEIVE_BUFFER_BYTES`] receive buffer and
-/// returns the smallest buffer the kernel then reports (Linux counts its bookkeeping in:
-/// twice what was granted), or `None` when `fds` holds no UDP socket.
+/// returns the smallest buffer granted (half what Linux reports, which counts its
+/// bookkeeping in), comparable with [`RECEIVE_BUFFER_BYTES`]; `None` when `fds` holds no
+/// UDP socket.
 pub(crate) fn enlarge(fds: impl IntoIterator<Item = RawFd>) -> Option<usize> {
     let wanted = libc::c_int::try_from(RECEIVE_BUFFER_BYTES).unwrap_or(libc::c_int::MAX);
     fds.into_iter()
@@ -42,7 +43,7 @@ pub(crate) fn enlarge(fds: impl IntoIterator<Item = RawFd>) -> Option<usize> {
             if !set(fd, libc::SO_RCVBUFFORCE, wanted) {
                 set(fd, libc::SO_RCVBUF, wanted);
             }
-            get(fd, libc::SO_RCVBUF).and_then(|n| usize::try_from(n).ok())
+            get(fd, libc::SO_RCVBUF).and_then(|n| usize::try_from(n / 2).ok())
         })
         .min()
 }
@@ -102,17 +103,17 @@ mod tests {
         let granted = enlarge([tcp.as_raw_fd(), udp.as_raw_fd()])
             .expect("one UDP socket among the descriptors");
         assert_eq!(
-            Some(granted as libc::c_int),
+            Some(2 * granted as libc::c_int),
             get(udp.as_raw_fd(), libc::SO_RCVBUF)
         );
-        // At least what SO_RCVBUF alone may grant (twice the smaller of the wish and
-        // rmem_max); more with CAP_NET_ADMIN.
+        // At least what SO_RCVBUF alone may grant (the smaller of the wish and rmem_max);
+        // more with CAP_NET_ADMIN.
         let rmem_max: usize = std::fs::read_to_string("/proc/sys/net/core/rmem_max")
             .expect("rmem_max")
             .trim()
             .parse()
             .expect("a number");
-        let floor = 2 * rmem_max.min(RECEIVE_BUFFER_BYTES);
+        let floor = rmem_max.min(RECEIVE_BUFFER_BYTES);
         assert!(granted >= floor, "{granted} < {floor} (default {default})");
         assert_eq!(get(tcp.as_raw_fd(), libc::SO_RCVBUF), Some(tcp_default));
         assert_eq!(enlarge([tcp.as_raw_fd()]), None);

@@ -178,6 +178,14 @@ fn stop_reader(mut reader: Proc) -> Result<(), String> {
     }
 }
 
+/// Stops a window's follower, a recorder or a plain reader.
+fn stop_follower((attached, proc): (Attached, Proc)) -> Result<(), String> {
+    match attached {
+        Attached::Recorder => stop_recorder(proc).map(drop),
+        _ => stop_reader(proc),
+    }
+}
+
 /// Stops a recorder with SIGTERM and returns its summary line.
 fn stop_recorder(mut recorder: Proc) -> Result<String, String> {
     recorder.signal(Signal::TERM);
@@ -225,12 +233,8 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
         if w != window || (w == 0 && pair.is_empty()) {
             window = w;
             toggled = Instant::now();
-            match follower.take() {
-                Some((Attached::Recorder, r)) => {
-                    stop_recorder(r)?;
-                }
-                Some((_, reader)) => stop_reader(reader)?,
-                None => {}
+            if let Some(f) = follower.take() {
+                stop_follower(f)?;
             }
             follower = match w % 3 {
                 1 => {
@@ -245,12 +249,8 @@ pub fn run(args: &RecordArgs) -> Result<(), Box<dyn std::error::Error>> {
         let attached = follower.as_ref().map_or(Attached::Nothing, |(a, _)| *a);
         pair.push(stream.tick(attached, settling)?);
     }
-    match follower.take() {
-        Some((Attached::Recorder, r)) => {
-            stop_recorder(r)?;
-        }
-        Some((_, reader)) => stop_reader(reader)?,
-        None => {}
+    if let Some(f) = follower.take() {
+        stop_follower(f)?;
     }
     for w in 0..=window {
         let _ = std::fs::remove_dir_all(args.dir.join(format!("pair{w}.yggrec")));
